@@ -1,0 +1,84 @@
+// BSDFs of the Mitsuba 3 subset gdvr supports, as one tagged struct with
+// switch dispatch (no virtual call per sample). All directions are in the local
+// shading frame (z = shading normal) and point away from the surface.
+// Conventions follow Mitsuba 3: eval() returns f(wo, wi) * |cos(theta_i)| and
+// excludes Dirac lobes; sample() returns weight = f * |cos| / pdf (for a Dirac
+// lobe: the lobe's throughput, with pdf set to the discrete selection probability).
+#pragma once
+
+#include <cstdint>
+
+#include "core/math/vec.h"
+#include "core/texture/texture.h"
+
+namespace gdvr {
+
+enum class BsdfType {
+  kDiffuse,
+  kConductor,
+  kRoughConductor,
+  kPlastic,
+  kRoughPlastic,
+  kDielectric,
+  kRoughDielectric,
+  kThinDielectric,
+};
+
+enum class MicrofacetType { kBeckmann, kGGX };
+
+// Lobe flags, combinable.
+enum BsdfLobe : uint32_t {
+  kLobeNone = 0,
+  kLobeDiffuseReflection = 1u << 0,
+  kLobeGlossyReflection = 1u << 1,
+  kLobeGlossyTransmission = 1u << 2,
+  kLobeDeltaReflection = 1u << 3,
+  kLobeDeltaTransmission = 1u << 4,
+  kLobeDelta = kLobeDeltaReflection | kLobeDeltaTransmission,
+  kLobeGlossy = kLobeGlossyReflection | kLobeGlossyTransmission,
+  kLobeTransmission = kLobeGlossyTransmission | kLobeDeltaTransmission,
+};
+
+struct Bsdf {
+  BsdfType type = BsdfType::kDiffuse;
+  bool two_sided = false;  // Mitsuba `twosided` wrapper: back side mirrors the front
+
+  Texture reflectance = Texture::constant(Rgb(0.5f));     // diffuse; plastic's diffuse_reflectance
+  Texture specular_reflectance = Texture::constant(Rgb(1.0f));
+  Texture specular_transmittance = Texture::constant(Rgb(1.0f));
+  Rgb eta{0.0f}, k{1.0f};           // conductor: complex IOR relative to the exterior (default Mitsuba "none" = perfect mirror)
+  float int_ior = 1.49f, ext_ior = 1.000277f;  // dielectric / plastic (Mitsuba defaults: polypropylene, air)
+  MicrofacetType distribution = MicrofacetType::kBeckmann;
+  float alpha_u = 0.1f, alpha_v = 0.1f;
+  bool sample_visible = true;
+  bool nonlinear = false;           // plastic
+
+  // Derived by finalize(): lobe flags, plastic's specular sampling weight, etc.
+  uint32_t lobes = kLobeNone;
+  float specular_sampling_weight = 0.5f;
+  float fdr_int = 0, fdr_ext = 0;   // plastic: diffuse Fresnel reflectance
+  void finalize();
+
+  bool has_lobe(uint32_t mask) const { return (lobes & mask) != 0; }
+  bool is_delta_only() const { return lobes != 0 && (lobes & ~uint32_t(kLobeDelta)) == 0; }
+  // Roughness used by gradient-domain shifts to classify a vertex as diffuse
+  // (reconnectable) or glossy/specular (half-vector copy). Diffuse = +infinity.
+  float roughness() const;
+};
+
+struct BsdfSample {
+  Vec3f wi;
+  float pdf = 0;         // solid-angle pdf; for Dirac lobes the discrete lobe probability
+  Rgb weight;            // f * |cos| / pdf
+  float eta = 1;         // relative IOR crossed (1 for reflection)
+  uint32_t lobe = kLobeNone;
+  bool is_delta() const { return (lobe & kLobeDelta) != 0; }
+};
+
+Rgb bsdf_eval(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
+float bsdf_pdf(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
+// u_lobe selects among lobes, u_dir samples the direction. Returns false when no
+// direction could be sampled (the path ends).
+bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir, BsdfSample* out);
+
+}  // namespace gdvr

@@ -1,0 +1,57 @@
+// The job: what to render and how. Its JSON form is the job file of
+// gdvr-render and the CLI, and the protobuf JSON form of gdvr.v1.JobSpec
+// (field names are the proto field names, snake_case), so one schema serves
+// everywhere. Unknown JSON fields are errors.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/scene/animation.h"
+#include "core/util/status.h"
+
+namespace gdvr {
+
+struct ReconstructionSpec {
+  std::string method = "l1";  // l1 | l2 | uniform | weighted | none
+  double alpha = 0.2;
+  int window = 20;            // frames in the temporal sliding window
+};
+
+struct OutputSpec {
+  std::vector<std::string> exr_layers;  // empty: all the integrator produces
+  bool previews = true;                 // 8-bit PNG through OCIO
+  std::string video_codec = "h264";     // h264 | prores | ffv1 | none
+  std::string ocio_display = "sRGB - Display";
+  std::string ocio_view = "ACES 1.0 - SDR Video";
+};
+
+struct JobSpec {
+  std::string scene;                   // .xml path (relative to the job file or the asset root)
+  std::string frames = "0";            // render-farm syntax: "1-100", "1-100x2", "1,5,10-20"
+  double fps = 24.0;
+  int width = 0, height = 0;           // 0: the scene's hdrfilm
+  int spp = 0;                         // 0: the scene's sample_count
+  double time_budget_s = 0;            // per frame; 0: use spp
+  uint64_t seed = 0;
+  std::string integrator = "pt";       // pt | gpt | tgpt
+  std::string shift = "reconnect";     // replay | reconnect | hybrid
+  ReconstructionSpec reconstruction;
+  std::map<std::string, std::string> params;  // Mitsuba <default> overrides
+  Animation animation;                 // keyframed tracks
+  OutputSpec outputs;
+  int priority = 0;
+  std::string reference;               // optional reference EXR (pattern with %04d for sequences)
+};
+
+// Parses "1-100x2,5" into a sorted list of distinct frame numbers. Errors name
+// the offending token. Limit the count with `max_frames` (0: no limit).
+Expected<std::vector<int>> parse_frame_range(const std::string& text, size_t max_frames = 0);
+
+// JSON <-> JobSpec. `origin` names the source in error messages.
+Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string& origin);
+std::string job_to_json(const JobSpec& job);
+
+}  // namespace gdvr
