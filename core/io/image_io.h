@@ -1,0 +1,26 @@
+// Reading and writing images: the one place that wraps OpenEXR and the
+// PNG/JPEG codecs. Pixels in memory are always linear float.
+#pragma once
+
+#include <string>
+
+#include "core/image/image.h"
+#include "core/util/status.h"
+
+namespace gdvr {
+
+// Reads an RGB image (EXR: the R,G,B channels of the main layer; PNG/JPEG:
+// decoded from sRGB to linear unless `raw`). Result has 3 channels.
+Expected<Image> read_rgb_image(const std::string& path, bool raw = false);
+
+// Writes every layer as float (or half for `half_float`) channels of one
+// multi-layer EXR, atomically (temporary file + rename): "R,G,B" for the
+// unnamed layer, "<layer>.<channel>" for the others.
+Status write_exr(const std::string& path, const LayeredImage& image, bool half_float = false);
+// Reads every channel of an EXR back into layers (the inverse of write_exr).
+Expected<LayeredImage> read_exr(const std::string& path);
+
+// Writes an 8-bit RGB PNG from already display-encoded values in [0, 1].
+Status write_png8(const std::string& path, const Image& display_rgb);
+
+}  // namespace gdvr

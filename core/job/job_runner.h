@@ -1,0 +1,63 @@
+// Runs a whole job in-process: loads the scene, renders each frame of the
+// range with the chosen integrator, reconstructs where the integrator needs it,
+// and hands every final frame to the caller in order. Used by gdvr-render, the
+// server and the farm workers alike.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/job/job_spec.h"
+#include "core/util/status.h"
+
+namespace gdvr {
+
+struct FrameStats {
+  int frame = 0;
+  double render_seconds = 0;
+  double reconstruct_seconds = 0;
+  int spp = 0;
+  uint64_t samples = 0;        // camera samples
+  uint64_t rays = 0;           // every ray traced (closest hit and shadow)
+  double samples_per_second = 0;
+  double rays_per_second = 0;
+  std::vector<std::string> left_out;  // what the pipeline skipped, and why
+  double rel_mse = -1;                 // against the job's reference, when present
+};
+
+struct FrameOutput {
+  int frame = 0;
+  LayeredImage image;  // unnamed layer = the final RGB image
+  FrameStats stats;
+};
+
+struct JobProgress {
+  int frames_done = 0;
+  int frames_total = 0;
+  double fraction = 0;         // of the whole job, including the frame in flight
+  double eta_seconds = -1;     // -1 until it can be estimated
+};
+
+struct JobRunOptions {
+  int threads = 0;               // 0: all cores
+  std::string base_dir;          // relative scene paths resolve here
+  std::string asset_root;        // when set, scene files must lie inside it
+  std::vector<int> skip_frames;  // already final (resume): not rendered again
+};
+
+struct JobCallbacks {
+  std::function<void(const FrameOutput&)> on_frame_final;  // in frame order
+  std::function<void(const JobProgress&)> on_progress;
+};
+
+// Returns kCancelled if *cancel became true (checked once per tile).
+Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallbacks& callbacks,
+               const std::atomic<bool>* cancel);
+
+// Validates a job (scene loads, frame range parses, values in range) without rendering.
+Status validate_job(const JobSpec& job, const JobRunOptions& options);
+
+}  // namespace gdvr
