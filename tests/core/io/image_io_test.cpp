@@ -1,0 +1,213 @@
+#include "core/io/image_io.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace gdvr {
+namespace {
+
+// Per-process scratch names so concurrent test runs of other engineers in the
+// shared tree never collide.
+std::string scratch(const std::string& name) {
+  const char* dir = std::getenv("TMPDIR");
+  return std::string(dir ? dir : "/tmp") + "/gdvr_io_" + std::to_string(::getpid()) + "_" + name;
+}
+
+Image ramp(int w, int h, int nc, float offset) {
+  Image img(w, h, nc);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < nc; ++c) img.at(x, y, c) = offset + 0.37f * x - 1.25f * y + 10.0f * c;
+  return img;
+}
+
+bool file_exists(const std::string& path) {
+  std::ifstream f(path);
+  return f.good();
+}
+
+TEST(ExrRoundTrip, MultiLayerOddSizeFloatIsExact) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(7, 5, 3, 0.5f));
+  img.add("dx", {"R", "G", "B"}, ramp(7, 5, 3, -3.0f));
+  img.add("variance", {"Y"}, ramp(7, 5, 1, 100.0f));
+  img.add("albedo", {"Z", "A"}, ramp(7, 5, 2, 7.0f));  // deliberately non-sorted
+  const std::string path = scratch("roundtrip.exr");
+  ASSERT_TRUE(write_exr(path, img).ok());
+  EXPECT_FALSE(file_exists(path + ".tmp." + std::to_string(::getpid())));
+
+  Expected<LayeredImage> back = read_exr(path);
+  ASSERT_TRUE(back.ok()) << back.status().to_string();
+  ASSERT_EQ(back->layers.size(), img.layers.size());
+  for (size_t i = 0; i < img.layers.size(); ++i) {
+    const ImageLayer& a = img.layers[i];
+    const ImageLayer& b = back->layers[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_EQ(a.channels, b.channels);
+    ASSERT_EQ(b.image.width(), 7);
+    ASSERT_EQ(b.image.height(), 5);
+    EXPECT_EQ(a.image.data(), b.image.data()) << "layer " << a.name;
+  }
+
+  Expected<Image> rgb = read_rgb_image(path);
+  ASSERT_TRUE(rgb.ok()) << rgb.status().to_string();
+  EXPECT_EQ(rgb->data(), img.layers[0].image.data());
+  std::remove(path.c_str());
+}
+
+TEST(ExrRoundTrip, HalfFloatWithinHalfPrecision) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(9, 3, 3, 0.25f));
+  const std::string path = scratch("half.exr");
+  const Status st = write_exr(path, img, /* half_float = */ true);
+  ASSERT_TRUE(st.ok()) << st.to_string();
+  Expected<LayeredImage> back = read_exr(path);
+  ASSERT_TRUE(back.ok()) << back.status().to_string();
+  const auto& a = img.layers[0].image.data();
+  const auto& b = back->layers[0].image.data();
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], std::abs(a[i]) * 1e-3f + 1e-4f);
+  std::remove(path.c_str());
+}
+
+TEST(ExrWrite, RejectsMismatchedLayers) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, Image(4, 4, 3));
+  img.add("dx", {"R", "G", "B"}, Image(5, 4, 3));
+  const Status st = write_exr(scratch("bad.exr"), img);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(st.message().find("dx"), std::string::npos) << st.message();
+
+  LayeredImage wrong_channels;
+  wrong_channels.add("", {"R", "G"}, Image(4, 4, 3));
+  EXPECT_FALSE(write_exr(scratch("bad2.exr"), wrong_channels).ok());
+  EXPECT_FALSE(write_exr(scratch("bad3.exr"), LayeredImage{}).ok());
+}
+
+TEST(ExrRead, BundledReferences) {
+  const std::string dir = std::string(GDVR_SOURCE_DIR) + "/scenes/references/";
+  struct Ref {
+    const char* file;
+    int width, height;
+  };
+  const Ref refs[] = {{"cbox_256_box_4096spp.exr", 256, 256},
+                      {"cornell-box_256_box_4096spp.exr", 256, 256},
+                      {"matpreview_256x192_box_4096spp.exr", 256, 192},
+                      {"veach-mis_320x180_box_4096spp.exr", 320, 180}};
+  for (const Ref& r : refs) {
+    Expected<Image> img = read_rgb_image(dir + r.file);
+    ASSERT_TRUE(img.ok()) << img.status().to_string();
+    EXPECT_EQ(img->width(), r.width) << r.file;
+    EXPECT_EQ(img->height(), r.height) << r.file;
+    EXPECT_EQ(img->channels(), 3);
+    double sum = 0;
+    for (float v : img->data()) {
+      ASSERT_TRUE(std::isfinite(v)) << r.file;
+      sum += v;
+    }
+    const double mean = sum / double(img->data().size());
+    // Lit interiors rendered at unit exposure: neither black nor blown out.
+    EXPECT_GT(mean, 0.005) << r.file;
+    EXPECT_LT(mean, 20.0) << r.file;
+  }
+}
+
+TEST(ExrRead, TruncatedAndCorruptFilesGiveErrors) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(64, 48, 3, 1.0f));
+  const std::string good = scratch("good.exr");
+  ASSERT_TRUE(write_exr(good, img).ok());
+  std::ifstream in(good, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
+  ASSERT_GT(bytes.size(), 400u);
+
+  const std::string truncated = scratch("truncated.exr");
+  std::ofstream(truncated, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() / 2));
+  Expected<Image> t = read_rgb_image(truncated);
+  ASSERT_FALSE(t.ok());
+  EXPECT_NE(t.status().message().find(truncated), std::string::npos) << t.status().message();
+  EXPECT_FALSE(read_exr(truncated).ok());
+
+  // Header intact, body garbage: exercises the decompressor's error paths.
+  std::vector<char> garbled = bytes;
+  for (size_t i = 300; i < garbled.size(); ++i) garbled[i] = char(i * 131 + 7);
+  const std::string corrupt = scratch("corrupt.exr");
+  std::ofstream(corrupt, std::ios::binary).write(garbled.data(), std::streamsize(garbled.size()));
+  EXPECT_FALSE(read_rgb_image(corrupt).ok());
+  EXPECT_FALSE(read_exr(corrupt).ok());
+
+  // Only the magic number.
+  const std::string magic_only = scratch("magic.exr");
+  std::ofstream(magic_only, std::ios::binary).write(bytes.data(), 4);
+  EXPECT_FALSE(read_rgb_image(magic_only).ok());
+
+  for (const auto& p : {good, truncated, corrupt, magic_only}) std::remove(p.c_str());
+}
+
+TEST(ImageIo, MissingFileIsNotFound) {
+  Expected<Image> img = read_rgb_image(scratch("does_not_exist.png"));
+  ASSERT_FALSE(img.ok());
+  EXPECT_EQ(img.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(img.status().message().find("does_not_exist.png"), std::string::npos);
+  EXPECT_EQ(read_exr(scratch("nope.exr")).status().code(), StatusCode::kNotFound);
+}
+
+TEST(ImageIo, GarbageFileIsInvalidArgument) {
+  const std::string path = scratch("garbage.png");
+  std::ofstream(path) << "this is not an image";
+  Expected<Image> img = read_rgb_image(path);
+  ASSERT_FALSE(img.ok());
+  EXPECT_EQ(img.status().code(), StatusCode::kInvalidArgument);
+  std::remove(path.c_str());
+}
+
+TEST(PngRoundTrip, WriteThenReadRawAndLinear) {
+  Image img(5, 3, 3);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 5; ++x) img.set_rgb(x, y, {x / 4.0f, y / 2.0f, 0.5f});
+  img.at(0, 0, 0) = std::nanf("");  // must not crash or turn white
+  img.at(1, 0, 0) = 7.0f;           // clamps
+  const std::string path = scratch("roundtrip.png");
+  ASSERT_TRUE(write_png8(path, img).ok());
+
+  Expected<Image> raw = read_rgb_image(path, /* raw = */ true);
+  ASSERT_TRUE(raw.ok()) << raw.status().to_string();
+  ASSERT_EQ(raw->width(), 5);
+  ASSERT_EQ(raw->height(), 3);
+  EXPECT_EQ(raw->at(0, 0, 0), 0.0f);
+  EXPECT_EQ(raw->at(1, 0, 0), 1.0f);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 2; x < 5; ++x)
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(raw->at(x, y, c), img.at(x, y, c), 0.5f / 255.0f + 1e-6f);
+
+  Expected<Image> lin = read_rgb_image(path);
+  ASSERT_TRUE(lin.ok());
+  // 128/255 encoded sRGB is ~0.2158 linear.
+  EXPECT_NEAR(lin->at(2, 0, 2), 0.2158f, 2e-3f);
+
+  EXPECT_FALSE(write_png8(scratch("empty.png"), Image()).ok());
+  std::remove(path.c_str());
+}
+
+TEST(PngRoundTrip, GreyImageExpandsToRgb) {
+  Image grey(4, 2, 1);
+  for (size_t i = 0; i < grey.data().size(); ++i) grey.data()[i] = float(i) / 7.0f;
+  const std::string path = scratch("grey.png");
+  ASSERT_TRUE(write_png8(path, grey).ok());
+  Expected<Image> back = read_rgb_image(path, /* raw = */ true);
+  ASSERT_TRUE(back.ok());
+  ASSERT_EQ(back->channels(), 3);
+  EXPECT_EQ(back->at(3, 1, 0), back->at(3, 1, 2));
+  EXPECT_NEAR(back->at(3, 1, 1), 1.0f, 1e-6f);
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace gdvr
