@@ -9,7 +9,7 @@ PACKAGES=(
   # ray tracing, maths, parallelism
   libembree-dev libeigen3-dev libtbb-dev
   # images, colour, video
-  libopenexr-dev libopencolorio-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
+  libopenexr-dev libopencolorio-dev opencolorio-tools libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   libpng-dev libjpeg-dev libstb-dev
   # scene formats
   libpugixml-dev zlib1g-dev libtinygltf-dev nlohmann-json3-dev
