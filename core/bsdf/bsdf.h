@@ -6,6 +6,7 @@
 // lobe: the lobe's throughput, with pdf set to the discrete selection probability).
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include "core/math/vec.h"
@@ -57,6 +58,13 @@ struct Bsdf {
   uint32_t lobes = kLobeNone;
   float specular_sampling_weight = 0.5f;
   float fdr_int = 0, fdr_ext = 0;   // plastic: diffuse Fresnel reflectance
+  // roughplastic: Mitsuba's precomputed rough-interface transmittance at
+  // cos(theta) = i / 63 and the internal diffuse reflectance (roughplastic.cpp).
+  static constexpr int kRoughTransmittanceRes = 64;
+  std::array<float, kRoughTransmittanceRes> rough_transmittance{};
+  float rough_internal_reflectance = 0;
+  // Derives the fields above from the parameters. Call once after setting them
+  // (and again after changing them); eval/pdf/sample assume it was called.
   void finalize();
 
   bool has_lobe(uint32_t mask) const { return (lobes & mask) != 0; }
@@ -66,17 +74,30 @@ struct Bsdf {
   float roughness() const;
 };
 
+// Roughness of one sampled lobe (BsdfSample::lobe): +inf for diffuse lobes,
+// alpha (the smaller of alpha_u/alpha_v) for glossy lobes, 0 for Dirac lobes.
+// Plastic mixes a Dirac and a diffuse lobe, so shifts should classify by lobe.
+float bsdf_lobe_roughness(const Bsdf& bsdf, uint32_t lobe);
+
 struct BsdfSample {
   Vec3f wi;
   float pdf = 0;         // solid-angle pdf; for Dirac lobes the discrete lobe probability
   Rgb weight;            // f * |cos| / pdf
-  float eta = 1;         // relative IOR crossed (1 for reflection)
+  float eta = 1;         // relative IOR crossed, Mitsuba's eta_it (1 for reflection)
   uint32_t lobe = kLobeNone;
   bool is_delta() const { return (lobe & kLobeDelta) != 0; }
 };
 
+// f * |cos theta_i| and the solid-angle pdf of sampling wi given wo, in one call
+// (shares the half vector, D, G1 and Fresnel terms). Dirac lobes excluded.
+struct BsdfEval {
+  Rgb value;
+  float pdf = 0;
+};
+
 Rgb bsdf_eval(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
 float bsdf_pdf(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
+BsdfEval bsdf_eval_pdf(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
 // u_lobe selects among lobes, u_dir samples the direction. Returns false when no
 // direction could be sampled (the path ends).
 bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir, BsdfSample* out);

@@ -1,0 +1,246 @@
+#include "core/bsdf/microfacet.h"
+
+#include <cmath>
+#include <vector>
+
+#include "core/bsdf/fresnel.h"
+
+namespace gdvr {
+namespace {
+
+constexpr float kInvSqrtPi = 0.56418958354775628695f;
+
+// (sin phi, cos phi) of a direction, (0, 1) at the pole as Mitsuba's Frame3f.
+std::pair<float, float> sincos_phi(Vec3f v) {
+  float sin_theta_2 = 1.0f - v.z * v.z;
+  if (std::abs(sin_theta_2) <= 4.0f * 5.96046448e-8f) return {0.0f, 1.0f};
+  float inv = 1.0f / std::sqrt(sin_theta_2);
+  return {std::clamp(v.y * inv, -1.0f, 1.0f), std::clamp(v.x * inv, -1.0f, 1.0f)};
+}
+
+// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n, double precision).
+void gauss_legendre(int n, std::vector<double>* nodes, std::vector<double>* weights) {
+  nodes->resize(n);
+  weights->resize(n);
+  for (int i = 0; i < n; ++i) {
+    double x = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1, p1 = x;
+      for (int k = 2; k <= n; ++k) {
+        double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      dp = n * (x * p1 - p0) / (x * x - 1);
+      double dx = p1 / dp;
+      x -= dx;
+      if (std::abs(dx) < 1e-15) break;
+    }
+    {
+      double p0 = 1, p1 = x;
+      for (int k = 2; k <= n; ++k) {
+        double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      dp = n * (x * p1 - p0) / (x * x - 1);
+    }
+    (*nodes)[n - 1 - i] = x;
+    (*weights)[n - 1 - i] = 2.0 / ((1 - x * x) * dp * dp);
+  }
+}
+
+}  // namespace
+
+float erfinv(float x) {
+  // Giles, "Approximating the erfinv function", GPU Computing Gems Jade, 2011.
+  float w = -std::log((1.0f - x) * (1.0f + x)), p;
+  if (w < 5.0f) {
+    w -= 2.5f;
+    p = 2.81022636e-08f;
+    p = 3.43273939e-07f + p * w;
+    p = -3.5233877e-06f + p * w;
+    p = -4.39150654e-06f + p * w;
+    p = 0.00021858087f + p * w;
+    p = -0.00125372503f + p * w;
+    p = -0.00417768164f + p * w;
+    p = 0.246640727f + p * w;
+    p = 1.50140941f + p * w;
+  } else {
+    w = std::sqrt(w) - 3.0f;
+    p = -0.000200214257f;
+    p = 0.000100950558f + p * w;
+    p = 0.00134934322f + p * w;
+    p = -0.00367342844f + p * w;
+    p = 0.00573950773f + p * w;
+    p = -0.0076224613f + p * w;
+    p = 0.00943887047f + p * w;
+    p = 1.00167406f + p * w;
+    p = 2.83297682f + p * w;
+  }
+  return p * x;
+}
+
+Vec2f square_to_uniform_disk_concentric(Vec2f u) {
+  // Shirley & Chiu 1997, in Mitsuba's branch-free form (warp.h).
+  float r1 = 2.0f * u.x - 1.0f, r2 = 2.0f * u.y - 1.0f;
+  if (r1 == 0.0f && r2 == 0.0f) return {0.0f, 0.0f};
+  bool quadrant_1_or_3 = std::abs(r1) < std::abs(r2);
+  float r = quadrant_1_or_3 ? r2 : r1, rp = quadrant_1_or_3 ? r1 : r2;
+  float phi = 0.25f * kPi * rp / r;
+  if (quadrant_1_or_3) phi = 0.5f * kPi - phi;
+  return {r * std::cos(phi), r * std::sin(phi)};
+}
+
+MicrofacetDistribution::MicrofacetDistribution(MicrofacetType t, float au, float av, bool visible)
+    : type(t), alpha_u(std::max(au, 1e-4f)), alpha_v(std::max(av, 1e-4f)), sample_visible(visible) {}
+
+float MicrofacetDistribution::eval(Vec3f m) const {
+  float alpha_uv = alpha_u * alpha_v, cos_theta = m.z, cos_theta_2 = cos_theta * cos_theta;
+  if (cos_theta_2 <= 0.0f) return 0.0f;
+  float result;
+  if (type == MicrofacetType::kBeckmann) {
+    result = std::exp(-(sqr(m.x / alpha_u) + sqr(m.y / alpha_v)) / cos_theta_2) /
+             (kPi * alpha_uv * sqr(cos_theta_2));
+  } else {
+    result = 1.0f / (kPi * alpha_uv * sqr(sqr(m.x / alpha_u) + sqr(m.y / alpha_v) + sqr(m.z)));
+  }
+  // Mitsuba drops tiny values to avoid numerical trouble later in the model.
+  return result * cos_theta > 1e-20f ? result : 0.0f;
+}
+
+float MicrofacetDistribution::pdf(Vec3f wi, Vec3f m) const {
+  float result = eval(m);
+  if (result == 0.0f) return 0.0f;
+  if (sample_visible) {
+    if (wi.z == 0.0f) return 0.0f;
+    return result * smith_g1(wi, m) * abs_dot(wi, m) / wi.z;
+  }
+  return result * m.z;
+}
+
+float MicrofacetDistribution::smith_g1(Vec3f v, Vec3f m) const {
+  // Ensure consistent orientation: the back of a microfacet is never visible.
+  if (dot(v, m) * v.z <= 0.0f) return 0.0f;
+  float xy_alpha_2 = sqr(alpha_u * v.x) + sqr(alpha_v * v.y);
+  if (xy_alpha_2 == 0.0f) return 1.0f;  // perpendicular incidence
+  float tan_theta_alpha_2 = xy_alpha_2 / sqr(v.z);
+  if (type == MicrofacetType::kBeckmann) {
+    // Rational approximation (< 0.35% rel. error) of the Beckmann G1, as Mitsuba.
+    float a = 1.0f / std::sqrt(tan_theta_alpha_2), a_sqr = a * a;
+    if (a >= 1.6f) return 1.0f;
+    return (3.535f * a + 2.181f * a_sqr) / (1.0f + 2.276f * a + 2.577f * a_sqr);
+  }
+  return 2.0f / (1.0f + std::sqrt(1.0f + tan_theta_alpha_2));
+}
+
+Vec2f MicrofacetDistribution::sample_visible_11(float cos_theta_i, Vec2f u) const {
+  if (type == MicrofacetType::kBeckmann) {
+    // Jakob 2014, "An improved visible normal sampling routine for the Beckmann
+    // distribution": Newton inversion of the slope CDF in the erf() domain.
+    float tan_theta_i = safe_sqrt(1.0f - cos_theta_i * cos_theta_i) / cos_theta_i;
+    float cot_theta_i = 1.0f / tan_theta_i;
+    float maxval = std::erf(cot_theta_i);
+    u.x = std::clamp(u.x, 1e-6f, 1.0f - 1e-6f);
+    u.y = std::clamp(u.y, 1e-6f, 1.0f - 1e-6f);
+    float x = maxval - (maxval + 1.0f) * std::erf(std::sqrt(-std::log(u.x)));
+    u.x *= 1.0f + maxval + kInvSqrtPi * tan_theta_i * std::exp(-sqr(cot_theta_i));
+    for (int i = 0; i < 3; ++i) {
+      float slope = erfinv(x);
+      float value = 1.0f + x + kInvSqrtPi * tan_theta_i * std::exp(-sqr(slope)) - u.x;
+      float derivative = 1.0f - slope * tan_theta_i;
+      x -= value / derivative;
+    }
+    return {erfinv(x), erfinv(2.0f * u.y - 1.0f)};
+  }
+  // Heitz 2018, "Sampling the GGX distribution of visible normals" in slope form.
+  Vec2f p = square_to_uniform_disk_concentric(u);
+  float s = 0.5f * (1.0f + cos_theta_i);
+  p.y = (1.0f - s) * safe_sqrt(1.0f - p.x * p.x) + s * p.y;
+  float x = p.x, y = p.y, z = safe_sqrt(1.0f - x * x - y * y);
+  float sin_theta_i = safe_sqrt(1.0f - cos_theta_i * cos_theta_i);
+  float norm = 1.0f / (sin_theta_i * y + cos_theta_i * z);
+  return Vec2f(cos_theta_i * y - sin_theta_i * z, x) * norm;
+}
+
+std::pair<Vec3f, float> MicrofacetDistribution::sample(Vec3f wi, Vec2f u) const {
+  if (!sample_visible) {
+    float sin_phi, cos_phi, alpha_2;
+    if (is_isotropic()) {
+      sin_phi = std::sin(2.0f * kPi * u.y);
+      cos_phi = std::cos(2.0f * kPi * u.y);
+      alpha_2 = alpha_u * alpha_u;
+    } else {
+      float ratio = alpha_v / alpha_u, tmp = ratio * std::tan(2.0f * kPi * u.y);
+      cos_phi = 1.0f / std::sqrt(tmp * tmp + 1.0f);
+      cos_phi = std::copysign(cos_phi, std::abs(u.y - 0.5f) - 0.25f);
+      sin_phi = cos_phi * tmp;
+      alpha_2 = 1.0f / (sqr(cos_phi / alpha_u) + sqr(sin_phi / alpha_v));
+    }
+    float cos_theta, pdf;
+    if (type == MicrofacetType::kBeckmann) {
+      cos_theta = 1.0f / std::sqrt(1.0f - alpha_2 * std::log(1.0f - u.x));
+      float cos_theta_3 = std::max(cos_theta * cos_theta * cos_theta, 1e-20f);
+      pdf = (1.0f - u.x) / (kPi * alpha_u * alpha_v * cos_theta_3);
+    } else {
+      float tan_theta_m_2 = alpha_2 * u.x / (1.0f - u.x);
+      cos_theta = 1.0f / std::sqrt(1.0f + tan_theta_m_2);
+      float temp = 1.0f + tan_theta_m_2 / alpha_2;
+      float cos_theta_3 = std::max(cos_theta * cos_theta * cos_theta, 1e-20f);
+      pdf = 1.0f / (kPi * alpha_u * alpha_v * cos_theta_3 * sqr(temp));
+    }
+    float sin_theta = safe_sqrt(1.0f - cos_theta * cos_theta);
+    return {Vec3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta), pdf};
+  }
+  // Visible normals: stretch, sample the alpha = 1 slopes, rotate, unstretch.
+  Vec3f wi_p = normalize(Vec3f(alpha_u * wi.x, alpha_v * wi.y, wi.z));
+  auto [sin_phi, cos_phi] = sincos_phi(wi_p);
+  Vec2f slope = sample_visible_11(wi_p.z, u);
+  slope = Vec2f((cos_phi * slope.x - sin_phi * slope.y) * alpha_u,
+                (sin_phi * slope.x + cos_phi * slope.y) * alpha_v);
+  Vec3f m = normalize(Vec3f(-slope.x, -slope.y, 1.0f));
+  if (!is_finite(m)) return {Vec3f(0, 0, 1), 0.0f};
+  return {m, pdf(wi, m)};
+}
+
+float microfacet_eval_reflectance(const MicrofacetDistribution& distr, Vec3f wi, float eta) {
+  int res = eta > 1 ? 32 : 128;
+  std::vector<double> nodes, weights;
+  gauss_legendre(res, &nodes, &weights);
+  float result = 0.0f;
+  for (int j = 0; j < res; ++j) {
+    for (int i = 0; i < res; ++i) {
+      Vec2f node(float(nodes[i]) * 0.5f + 0.5f, float(nodes[j]) * 0.5f + 0.5f);
+      float w = float(weights[i]) * float(weights[j]);
+      Vec3f m = distr.sample(wi, node).first;
+      Vec3f wo = reflect(wi, m);
+      float f = fresnel_dielectric(dot(wi, m), eta).f;
+      float smith = distr.smith_g1(wo, m) * f;
+      if (wo.z <= 0.0f || wi.z <= 0.0f) smith = 0.0f;
+      result += smith * w * 0.25f;
+    }
+  }
+  return result;
+}
+
+float microfacet_eval_transmittance(const MicrofacetDistribution& distr, Vec3f wi, float eta) {
+  int res = eta > 1 ? 32 : 128;
+  std::vector<double> nodes, weights;
+  gauss_legendre(res, &nodes, &weights);
+  float result = 0.0f;
+  for (int j = 0; j < res; ++j) {
+    for (int i = 0; i < res; ++i) {
+      Vec2f node(float(nodes[i]) * 0.5f + 0.5f, float(nodes[j]) * 0.5f + 0.5f);
+      float w = float(weights[i]) * float(weights[j]);
+      Vec3f m = distr.sample(wi, node).first;
+      FresnelResult fr = fresnel_dielectric(dot(wi, m), eta);
+      Vec3f wo = refract_about(wi, m, fr.cos_theta_t, fr.eta_ti);
+      float smith = distr.smith_g1(wo, m) * (1.0f - fr.f);
+      if (wo.z * wi.z >= 0.0f) smith = 0.0f;
+      result += smith * w * 0.25f;
+    }
+  }
+  return result;
+}
+
+}  // namespace gdvr
