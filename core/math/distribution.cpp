@@ -1,0 +1,64 @@
+#include "core/math/distribution.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gdvr {
+
+Distribution1D::Distribution1D(std::vector<float> weights) {
+  weights_.resize(weights.size());
+  cdf_.resize(weights.size());
+  double sum = 0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    double w = (std::isfinite(weights[i]) && weights[i] > 0) ? double(weights[i]) : 0.0;
+    weights_[i] = w;
+    sum += w;
+    cdf_[i] = sum;
+  }
+  total_ = sum;
+  if (!(total_ > 0)) cdf_.clear();
+}
+
+size_t Distribution1D::sample(float u, float* u_remapped) const {
+  double target = double(u) * total_;
+  size_t i = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin());
+  i = std::min(i, cdf_.size() - 1);
+  while (weights_[i] == 0 && i > 0) --i;  // never land on a zero-weight bin
+  if (u_remapped) {
+    double lo = i > 0 ? cdf_[i - 1] : 0.0;
+    double r = weights_[i] > 0 ? (target - lo) / weights_[i] : 0.0;
+    *u_remapped = float(std::clamp(r, 0.0, double(0x1.fffffep-1f)));
+  }
+  return i;
+}
+
+Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int height)
+    : width_(width), height_(height) {
+  std::vector<float> row_sums(height);
+  conditional_.reserve(height);
+  for (int y = 0; y < height; ++y) {
+    std::vector<float> row(weights.begin() + size_t(y) * width, weights.begin() + size_t(y + 1) * width);
+    conditional_.emplace_back(row);
+    row_sums[y] = float(conditional_.back().total());
+  }
+  marginal_ = Distribution1D(row_sums);
+  if (marginal_.empty()) conditional_.clear();
+}
+
+Vec2f Distribution2D::sample(Vec2f u, float* pdf) const {
+  float uy, ux;
+  size_t y = marginal_.sample(u.y, &uy);
+  size_t x = conditional_[y].sample(u.x, &ux);
+  *pdf = marginal_.pmf(y) * conditional_[y].pmf(x) * float(width_) * float(height_);
+  return {(float(x) + ux) / float(width_), (float(y) + uy) / float(height_)};
+}
+
+float Distribution2D::pdf(Vec2f p) const {
+  if (empty()) return 0.0f;
+  int x = std::clamp(int(p.x * width_), 0, width_ - 1);
+  int y = std::clamp(int(p.y * height_), 0, height_ - 1);
+  if (conditional_[y].empty()) return 0.0f;
+  return marginal_.pmf(y) * conditional_[y].pmf(x) * float(width_) * float(height_);
+}
+
+}  // namespace gdvr

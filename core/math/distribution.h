@@ -1,0 +1,46 @@
+// Discrete and piecewise-constant distributions for importance sampling
+// (emitter selection by area, environment maps by luminance).
+#pragma once
+
+#include <vector>
+
+#include "core/math/vec.h"
+
+namespace gdvr {
+
+class Distribution1D {
+ public:
+  Distribution1D() = default;
+  // Non-negative weights; an all-zero or empty input yields an empty distribution.
+  explicit Distribution1D(std::vector<float> weights);
+
+  bool empty() const { return cdf_.empty() || total_ <= 0; }
+  size_t size() const { return weights_.size(); }
+  double total() const { return total_; }
+  float pmf(size_t i) const { return float(weights_[i] / total_); }
+  // Samples an index; `u_remapped` (optional) receives u rescaled to [0,1) within the bin.
+  size_t sample(float u, float* u_remapped = nullptr) const;
+
+ private:
+  std::vector<double> weights_, cdf_;  // double: long lists of tiny triangles
+  double total_ = 0;
+};
+
+// Piecewise-constant 2D distribution on [0,1]^2 from a width x height grid.
+class Distribution2D {
+ public:
+  Distribution2D() = default;
+  Distribution2D(const std::vector<float>& weights, int width, int height);
+
+  bool empty() const { return marginal_.empty(); }
+  // Returns a point in [0,1)^2 and its density w.r.t. area in [0,1]^2.
+  Vec2f sample(Vec2f u, float* pdf) const;
+  float pdf(Vec2f p) const;
+
+ private:
+  int width_ = 0, height_ = 0;
+  std::vector<Distribution1D> conditional_;  // one per row
+  Distribution1D marginal_;
+};
+
+}  // namespace gdvr

@@ -1,0 +1,404 @@
+#include "core/render/frame_scene.h"
+
+#include <cmath>
+#include <string>
+
+#include "core/math/sampling.h"
+
+namespace gdvr {
+namespace {
+
+// Mitsuba's lat-long convention (envmap.cpp): u = atan2(x, -z) / 2pi, v = acos(y) / pi.
+Vec2f direction_to_uv(Vec3f d) {
+  float u = std::atan2(d.x, -d.z) * kInvTwoPi;
+  float v = std::acos(std::clamp(d.y, -1.0f, 1.0f)) * kInvPi;
+  return {u - std::floor(u), v};
+}
+
+Vec3f uv_to_direction(Vec2f uv, float* sin_theta) {
+  float theta = uv.y * kPi, phi = uv.x * 2.0f * kPi;
+  float st = std::sin(theta);
+  *sin_theta = st;
+  return {std::sin(phi) * st, std::cos(theta), -std::cos(phi) * st};
+}
+
+// Bilinear lookup with texel (i, j) at u = i / width (periodic in u) and
+// v = j / (height - 1), as Mitsuba's envmap (which appends a copy of column 0).
+Rgb envmap_lookup(const Image& img, Vec2f uv) {
+  int w = img.width(), h = img.height();
+  float x = uv.x * float(w), y = uv.y * float(h - 1);
+  int x0 = std::clamp(int(std::floor(x)), 0, w), y0 = std::clamp(int(std::floor(y)), 0, h - 1);
+  float fx = std::clamp(x - float(x0), 0.0f, 1.0f), fy = std::clamp(y - float(y0), 0.0f, 1.0f);
+  int x1 = x0 + 1, y1 = std::min(y0 + 1, h - 1);
+  auto at = [&](int xi, int yi) { return img.rgb(xi % w, yi); };
+  return (at(x0, y0) * (1 - fx) + at(x1, y0) * fx) * (1 - fy) + (at(x0, y1) * (1 - fx) + at(x1, y1) * fx) * fy;
+}
+
+float triangle_area(Vec3f a, Vec3f b, Vec3f c) { return 0.5f * length(cross(b - a, c - a)); }
+
+}  // namespace
+
+Expected<std::unique_ptr<FrameScene>> FrameScene::create(const Scene& scene, const std::vector<bool>& animated) {
+  std::unique_ptr<FrameScene> fs(new FrameScene());
+  fs->scene_ = scene;
+  auto accel = Accelerator::create();
+  if (!accel.ok()) return accel.status();
+  fs->accel_ = std::move(accel.value());
+  fs->shapes_.resize(scene.shapes.size());
+  for (size_t i = 0; i < scene.shapes.size(); ++i) {
+    bool is_animated = i < animated.size() && animated[i];
+    GDVR_RETURN_IF_ERROR(fs->build_shape_state(i, is_animated));
+  }
+  GDVR_RETURN_IF_ERROR(fs->accel_->commit());
+  GDVR_RETURN_IF_ERROR(fs->prepare_emitters());
+  return fs;
+}
+
+Status FrameScene::build_shape_state(size_t i, bool animated) {
+  const Shape& shape = scene_.shapes[i];
+  ShapeState& s = shapes_[i];
+  s.instanced = animated;
+  s.to_world = shape.to_world;
+  const std::string name = "shape " + std::to_string(i) + (shape.id.empty() ? "" : " ('" + shape.id + "')");
+  if (shape.type == ShapeType::kSphere) {
+    s.center = shape.to_world.point(Vec3f(0.0f));
+    float rx = length(shape.to_world.vector({1, 0, 0})), ry = length(shape.to_world.vector({0, 1, 0})),
+          rz = length(shape.to_world.vector({0, 0, 1}));
+    if (std::abs(rx - ry) > 1e-4f * rx || std::abs(rx - rz) > 1e-4f * rx)
+      return invalid_argument(name + ": a sphere's to_world must scale uniformly");
+    s.radius = rx;
+    s.area = 4.0f * kPi * s.radius * s.radius;
+    if (animated) return accel_->add_sphere(int(i), Vec3f(0.0f), 1.0f, true, shape.to_world);
+    return accel_->add_sphere(int(i), s.center, s.radius, false, Transform());
+  }
+  if (!shape.mesh || shape.mesh->triangle_count() == 0) return invalid_argument(name + " has no triangles");
+  if (animated) {
+    s.mesh = shape.mesh;
+  } else {
+    // Bake static meshes into world space once: shading then needs no transform.
+    auto world = std::make_shared<TriangleMesh>(*shape.mesh);
+    for (Vec3f& p : world->positions) p = shape.to_world.point(p);
+    for (Vec3f& n : world->normals) n = normalize(shape.to_world.normal(n));
+    s.mesh = world;
+  }
+  const TriangleMesh& m = *s.mesh;
+  for (const Vec3f& p : m.positions)
+    if (!is_finite(p)) return invalid_argument(name + " has a non-finite vertex position");
+  return accel_->add_mesh(int(i), m.positions.data(), m.positions.size(), m.indices.data(), m.triangle_count(),
+                          animated, shape.to_world);
+}
+
+Status FrameScene::prepare_emitters() {
+  envmaps_.assign(scene_.emitters.size(), Envmap());
+  environment_ = -1;
+  for (size_t e = 0; e < scene_.emitters.size(); ++e) {
+    const Emitter& em = scene_.emitters[e];
+    if (em.type == EmitterType::kConstant || em.type == EmitterType::kEnvmap) {
+      if (environment_ >= 0) return invalid_argument("the scene has more than one environment emitter");
+      environment_ = int(e);
+    }
+    if (em.type == EmitterType::kEnvmap) {
+      if (!em.envmap || em.envmap->width() < 2 || em.envmap->height() < 3)
+        return invalid_argument("envmap emitter " + em.id + ": image missing or smaller than 2x3");
+      const Image& img = *em.envmap;
+      int w = img.width(), h = img.height();
+      // Luminance times sin(theta) at each texel, so that sampling uv is
+      // proportional to radiance per solid angle.
+      std::vector<float> weights(size_t(w) * h);
+      for (int y = 0; y < h; ++y) {
+        float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(h));
+        for (int x = 0; x < w; ++x) {
+          Rgb c = envmap_lookup(img, {(float(x) + 0.5f) / float(w), (float(y) + 0.5f) / float(h)});
+          float lum = std::max(0.0f, luminance(c));
+          weights[size_t(y) * w + x] = std::isfinite(lum) ? lum * sin_theta : 0.0f;
+        }
+      }
+      envmaps_[e].image = em.envmap;
+      envmaps_[e].distribution = Distribution2D(weights, w, h);
+    }
+    if (em.type == EmitterType::kArea) {
+      if (em.shape < 0 || size_t(em.shape) >= shapes_.size())
+        return invalid_argument("area emitter " + std::to_string(e) + " is not attached to a shape");
+      ShapeState& s = shapes_[size_t(em.shape)];
+      if (scene_.shapes[size_t(em.shape)].type == ShapeType::kMesh) {
+        const TriangleMesh& m = *s.mesh;
+        std::vector<float> areas(m.triangle_count());
+        for (size_t t = 0; t < areas.size(); ++t) {
+          Vec3f a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
+                c = m.positions[m.indices[3 * t + 2]];
+          if (s.instanced) a = s.to_world.point(a), b = s.to_world.point(b), c = s.to_world.point(c);
+          areas[t] = triangle_area(a, b, c);
+        }
+        s.triangle_areas = Distribution1D(areas);
+        s.area = float(s.triangle_areas.total());
+        if (!(s.area > 0)) return invalid_argument("area emitter on a shape with zero area");
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+Status FrameScene::update(const Scene& scene) {
+  if (scene.shapes.size() != scene_.shapes.size() || scene.emitters.size() != scene_.emitters.size())
+    return failed_precondition("FrameScene::update: the scene's structure changed");
+  bool moved = false;
+  for (size_t i = 0; i < shapes_.size(); ++i) {
+    const Transform& t = scene.shapes[i].to_world;
+    if (t == shapes_[i].to_world) continue;
+    if (!shapes_[i].instanced)
+      return failed_precondition("shape " + std::to_string(i) + " moved but was not marked animated");
+    shapes_[i].to_world = t;
+    scene_.shapes[i].to_world = t;
+    if (scene_.shapes[i].type == ShapeType::kSphere) {
+      shapes_[i].center = t.point(Vec3f(0.0f));
+      shapes_[i].radius = length(t.vector({1, 0, 0}));
+    }
+    GDVR_RETURN_IF_ERROR(accel_->set_instance_transform(int(i), t));
+    moved = true;
+  }
+  if (moved) GDVR_RETURN_IF_ERROR(accel_->commit());
+  scene_.emitters = scene.emitters;
+  scene_.camera = scene.camera;
+  return prepare_emitters();
+}
+
+bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
+  RayHit hit;
+  if (!accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, &hit)) return false;
+  const Shape& shape = scene_.shapes[size_t(hit.id)];
+  const ShapeState& s = shapes_[size_t(hit.id)];
+  si->t = hit.t;
+  si->shape = hit.id;
+  si->prim = hit.prim;
+  Vec3f ns;
+  if (shape.type == ShapeType::kSphere) {
+    Vec3f local = normalize(ray.o + ray.d * hit.t - s.center);
+    si->p = s.center + local * s.radius;  // re-project: tighter than o + t d
+    si->n = local;
+    ns = local;
+    // Sphere uv in the object frame (Mitsuba: phi / 2pi, theta / pi).
+    Vec3f lo = normalize(s.to_world.inverse().vector(local));
+    float phi = std::atan2(lo.y, lo.x);
+    if (phi < 0) phi += 2.0f * kPi;
+    si->uv = {phi * kInvTwoPi, std::acos(std::clamp(lo.z, -1.0f, 1.0f)) * kInvPi};
+  } else {
+    const TriangleMesh& m = *s.mesh;
+    uint32_t i0 = m.indices[3 * hit.prim], i1 = m.indices[3 * hit.prim + 1], i2 = m.indices[3 * hit.prim + 2];
+    float b1 = hit.u, b2 = hit.v, b0 = 1.0f - b1 - b2;
+    Vec3f p0 = m.positions[i0], p1 = m.positions[i1], p2 = m.positions[i2];
+    if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
+    si->p = p0 * b0 + p1 * b1 + p2 * b2;
+    si->n = normalize(cross(p1 - p0, p2 - p0));
+    ns = si->n;
+    if (!m.normals.empty() && !shape.face_normals) {
+      Vec3f interp = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;
+      if (s.instanced) interp = s.to_world.normal(interp);
+      interp = normalize(interp);
+      if (is_finite(interp) && length_squared(interp) > 0.5f) ns = interp;
+    }
+    si->uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
+  }
+  if (shape.flip_normals) {
+    si->n = -si->n;
+    ns = -ns;
+  }
+  si->sh_frame = Frame(ns);
+  si->wi = si->sh_frame.to_local(-ray.d);
+  return true;
+}
+
+// ---- Emitters ----
+
+EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref, float u_select, Vec2f u) const {
+  EmitterSample es;
+  size_t count = scene_.emitters.size();
+  if (count == 0) return es;
+  // Uniform emitter selection, as Mitsuba 3 does (keeps noise comparable).
+  float scaled = u_select * float(count);
+  size_t index = std::min(size_t(scaled), count - 1);
+  float select_pdf = 1.0f / float(count);
+  const Emitter& em = scene_.emitters[index];
+  es.emitter = int(index);
+
+  switch (em.type) {
+    case EmitterType::kArea: {
+      const ShapeState& s = shapes_[size_t(em.shape)];
+      const Shape& shape = scene_.shapes[size_t(em.shape)];
+      Vec3f p, n;
+      float pdf_solid_angle;
+      if (shape.type == ShapeType::kSphere) {
+        Vec3f dc = s.center - ref.p;
+        float dc2 = length_squared(dc);
+        float r2 = s.radius * s.radius;
+        if (dc2 > r2 * (1.0f + 1e-5f)) {
+          // Outside: sample the cone of directions the sphere subtends.
+          float inv_dc = 1.0f / std::sqrt(dc2);
+          float sin_alpha = s.radius * inv_dc;
+          float cos_alpha = safe_sqrt(1.0f - sin_alpha * sin_alpha);
+          Frame frame(dc * inv_dc);
+          Vec3f local = square_to_uniform_cone(u, cos_alpha);
+          Vec3f d = frame.to_world(local);
+          // Closest intersection of the ray with the sphere.
+          float b = dot(d, dc);
+          float disc = b * b - (dc2 - r2);
+          float t = b - safe_sqrt(disc);
+          p = ref.p + d * t;
+          n = normalize(p - s.center);
+          p = s.center + n * s.radius;
+          pdf_solid_angle = uniform_cone_pdf(cos_alpha);
+        } else {
+          // Inside (or on) the sphere: uniform area sampling.
+          n = square_to_uniform_sphere(u);
+          p = s.center + n * s.radius;
+          Vec3f d = p - ref.p;
+          float dist2 = length_squared(d);
+          float cos_l = std::abs(dot(normalize(d), n));
+          pdf_solid_angle = cos_l > 0 ? dist2 / (s.area * cos_l) : 0.0f;
+        }
+        if (shape.flip_normals) n = -n;
+      } else {
+        float u_tri;
+        size_t tri = s.triangle_areas.sample(u.x, &u_tri);
+        const TriangleMesh& m = *s.mesh;
+        uint32_t i0 = m.indices[3 * tri], i1 = m.indices[3 * tri + 1], i2 = m.indices[3 * tri + 2];
+        Vec3f p0 = m.positions[i0], p1 = m.positions[i1], p2 = m.positions[i2];
+        if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
+        Vec2f b = square_to_uniform_triangle({u_tri, u.y});
+        p = p0 * (1.0f - b.x - b.y) + p1 * b.x + p2 * b.y;
+        n = normalize(cross(p1 - p0, p2 - p0));
+        if (!m.normals.empty() && !shape.face_normals) {
+          Vec3f interp = m.normals[i0] * (1.0f - b.x - b.y) + m.normals[i1] * b.x + m.normals[i2] * b.y;
+          if (s.instanced) interp = s.to_world.normal(interp);
+          interp = normalize(interp);
+          if (is_finite(interp) && length_squared(interp) > 0.5f) n = interp;
+        }
+        if (shape.flip_normals) n = -n;
+        Vec3f d = p - ref.p;
+        float dist2 = length_squared(d);
+        float cos_l = std::abs(dot(d, n)) / std::sqrt(dist2);
+        pdf_solid_angle = cos_l > 0 ? dist2 / (s.area * cos_l) : 0.0f;
+      }
+      Vec3f d = p - ref.p;
+      float dist = length(d);
+      if (!(dist > 0) || !(pdf_solid_angle > 0) || !std::isfinite(pdf_solid_angle)) return es;
+      es.d = d / dist;
+      es.dist = dist;
+      es.pdf = pdf_solid_angle * select_pdf;
+      // One-sided: emits only on the side its normal faces.
+      if (dot(n, es.d) < 0) es.weight = em.radiance / es.pdf;
+      return es;
+    }
+    case EmitterType::kPoint:
+    case EmitterType::kSpot: {
+      Vec3f pos = em.to_world.point(Vec3f(0.0f));
+      Vec3f d = pos - ref.p;
+      float dist2 = length_squared(d);
+      if (!(dist2 > 0)) return es;
+      es.dist = std::sqrt(dist2);
+      es.d = d / es.dist;
+      es.delta = true;
+      es.pdf = select_pdf;
+      Rgb intensity = em.intensity;
+      if (em.type == EmitterType::kSpot) {
+        Vec3f local = normalize(em.to_world.inverse().vector(-es.d));
+        float cos_theta = local.z;
+        float cos_cutoff = std::cos(radians(em.cutoff_angle));
+        float cos_beam = std::cos(radians(em.beam_width));
+        if (cos_theta <= cos_cutoff) return es;
+        if (cos_theta < cos_beam) {
+          // Mitsuba's spot: linear falloff in angle between beam_width and cutoff.
+          float falloff = (radians(em.cutoff_angle) - std::acos(cos_theta)) /
+                          (radians(em.cutoff_angle) - radians(em.beam_width));
+          intensity = intensity * std::clamp(falloff, 0.0f, 1.0f);
+        }
+      }
+      es.weight = intensity / (dist2 * select_pdf);
+      return es;
+    }
+    case EmitterType::kDirectional: {
+      Vec3f dir = normalize(em.to_world.vector({0, 0, 1}));
+      es.d = -dir;
+      es.dist = kInfinity;
+      es.delta = true;
+      es.pdf = select_pdf;
+      es.weight = em.irradiance / select_pdf;
+      return es;
+    }
+    case EmitterType::kConstant: {
+      es.d = square_to_uniform_sphere(u);
+      es.dist = kInfinity;
+      es.pdf = kInvFourPi * select_pdf;
+      es.weight = em.radiance / es.pdf;
+      return es;
+    }
+    case EmitterType::kEnvmap: {
+      const Envmap& env = envmaps_[index];
+      if (env.distribution.empty()) return es;
+      float pdf_uv;
+      Vec2f uv = env.distribution.sample(u, &pdf_uv);
+      float sin_theta;
+      Vec3f local = uv_to_direction(uv, &sin_theta);
+      if (!(sin_theta > 1e-7f) || !(pdf_uv > 0)) return es;
+      es.d = normalize(em.to_world.vector(local));
+      es.dist = kInfinity;
+      es.pdf = pdf_uv / (2.0f * kPi * kPi * sin_theta) * select_pdf;
+      es.weight = eval_envmap(em, es.d) / es.pdf;
+      return es;
+    }
+  }
+  return es;
+}
+
+Rgb FrameScene::eval_envmap(const Emitter& em, Vec3f d) const {
+  Vec3f local = normalize(em.to_world.inverse().vector(d));
+  return envmap_lookup(*em.envmap, direction_to_uv(local)) * em.scale;
+}
+
+float FrameScene::pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const {
+  const Shape& shape = scene_.shapes[size_t(hit.shape)];
+  if (shape.type == ShapeType::kSphere) {
+    Vec3f dc = s.center - ref_p;
+    float dc2 = length_squared(dc), r2 = s.radius * s.radius;
+    if (dc2 > r2 * (1.0f + 1e-5f)) {
+      float sin_alpha = s.radius / std::sqrt(dc2);
+      float cos_alpha = safe_sqrt(1.0f - sin_alpha * sin_alpha);
+      return uniform_cone_pdf(cos_alpha);
+    }
+  }
+  Vec3f d = hit.p - ref_p;
+  float dist2 = length_squared(d);
+  float cos_l = std::abs(dot(d, hit.sh_frame.n)) / std::sqrt(dist2);
+  return cos_l > 0 ? dist2 / (s.area * cos_l) : 0.0f;
+}
+
+float FrameScene::pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& hit) const {
+  int e = emitter_of_shape(hit.shape);
+  if (e < 0) return 0.0f;
+  return pdf_shape_direction(shapes_[size_t(hit.shape)], ref_p, hit) / float(scene_.emitters.size());
+}
+
+float FrameScene::pdf_environment_direction(Vec3f d) const {
+  if (environment_ < 0) return 0.0f;
+  const Emitter& em = scene_.emitters[size_t(environment_)];
+  float select_pdf = 1.0f / float(scene_.emitters.size());
+  if (em.type == EmitterType::kConstant) return kInvFourPi * select_pdf;
+  const Envmap& env = envmaps_[size_t(environment_)];
+  Vec3f local = normalize(em.to_world.inverse().vector(d));
+  float sin_theta = std::sqrt(std::max(local.x * local.x + local.z * local.z, 1e-14f));
+  return env.distribution.pdf(direction_to_uv(local)) / (2.0f * kPi * kPi * sin_theta) * select_pdf;
+}
+
+Rgb FrameScene::eval_area_emitter(const SurfaceInteraction& si) const {
+  int e = emitter_of_shape(si.shape);
+  if (e < 0 || si.wi.z <= 0) return Rgb(0.0f);
+  return scene_.emitters[size_t(e)].radiance;
+}
+
+Rgb FrameScene::eval_environment(Vec3f d) const {
+  if (environment_ < 0) return Rgb(0.0f);
+  const Emitter& em = scene_.emitters[size_t(environment_)];
+  if (em.type == EmitterType::kConstant) return em.radiance;
+  return eval_envmap(em, d);
+}
+
+}  // namespace gdvr

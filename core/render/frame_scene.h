@@ -1,0 +1,85 @@
+// The scene in world space at one frame: the accelerator, world-space shape
+// data for shading, and the tables emitter sampling needs. Built once per job;
+// update() moves what an animation changed (instance transforms, emitter and
+// camera placement) without rebuilding static geometry.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "core/accel/accelerator.h"
+#include "core/math/distribution.h"
+#include "core/render/ray.h"
+#include "core/scene/scene.h"
+
+namespace gdvr {
+
+// A sampled direction towards an emitter, as Mitsuba's DirectionSample.
+struct EmitterSample {
+  Vec3f d;               // unit direction from the reference point
+  float dist = 0;        // to the emitter point (infinity for infinite emitters)
+  float pdf = 0;         // solid angle, including emitter selection (1 for deltas: see `delta`)
+  bool delta = false;
+  Rgb weight;            // Le / pdf (already divided; zero when it does not emit towards us)
+  int emitter = -1;
+};
+
+class FrameScene {
+ public:
+  // `animated_shapes[i]` marks shapes whose transform changes during the job
+  // (they are instanced). May be empty: nothing animates.
+  static Expected<std::unique_ptr<FrameScene>> create(const Scene& scene, const std::vector<bool>& animated_shapes);
+
+  // Takes the transforms of animated shapes, all emitters and the camera from
+  // `scene` (the same scene after apply_animation).
+  Status update(const Scene& scene);
+
+  const Scene& scene() const { return scene_; }
+  bool has_environment() const { return environment_ >= 0; }
+
+  bool intersect(const Ray& ray, SurfaceInteraction* si) const;
+  bool occluded(const Ray& ray) const { return accel_->occluded(ray.o, ray.d, ray.tmin, ray.tmax); }
+
+  // ---- Emitters ----
+  // Samples an emitter uniformly, then a direction towards it. Visibility is
+  // NOT tested here (the integrator traces the shadow ray and counts it).
+  EmitterSample sample_emitter_direction(const SurfaceInteraction& ref, float u_select, Vec2f u) const;
+  // Solid-angle pdf (with selection) that sample_emitter_direction would have
+  // produced `hit` from `ref_p`.
+  float pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& hit) const;
+  float pdf_environment_direction(Vec3f d) const;
+  // Radiance leaving an emitting surface towards -ray (area emitters).
+  Rgb eval_area_emitter(const SurfaceInteraction& si) const;
+  // Radiance arriving along a ray that escaped the scene.
+  Rgb eval_environment(Vec3f d) const;
+  int emitter_of_shape(int shape) const { return scene_.shapes[size_t(shape)].emitter; }
+
+ private:
+  struct ShapeState {
+    std::shared_ptr<const TriangleMesh> mesh;  // world space if !instanced
+    bool instanced = false;
+    Transform to_world;
+    Vec3f center;       // sphere, world space
+    float radius = 0;   // sphere, world space
+    Distribution1D triangle_areas;  // area emitters only
+    float area = 0;
+  };
+  struct Envmap {
+    std::shared_ptr<const Image> image;
+    Distribution2D distribution;
+  };
+
+  FrameScene() = default;
+  Status build_shape_state(size_t i, bool animated);
+  Status prepare_emitters();
+  float pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const;
+  Rgb eval_envmap(const Emitter& e, Vec3f d) const;
+
+  Scene scene_;
+  std::unique_ptr<Accelerator> accel_;
+  std::vector<ShapeState> shapes_;
+  std::vector<Envmap> envmaps_;  // parallel to scene_.emitters (empty unless envmap)
+  int environment_ = -1;         // index of the constant/envmap emitter
+};
+
+}  // namespace gdvr

@@ -1,0 +1,34 @@
+// Unidirectional path tracing with next-event estimation and BSDF sampling
+// combined by the power heuristic (REFERENCE.md §1), written to match Mitsuba
+// 3's `path` integrator: max_depth counts path segments (1 = emitters seen
+// directly, -1 = unbounded), Russian roulette from rr_depth with survival
+// min(max(throughput) * eta^2, 0.95).
+#pragma once
+
+#include <cstdint>
+
+#include "core/math/rng.h"
+#include "core/render/frame_scene.h"
+
+namespace gdvr {
+
+struct PathTracerSettings {
+  int max_depth = -1;
+  int rr_depth = 5;
+  bool hide_emitters = false;
+};
+
+struct PathCounters {
+  uint64_t rays = 0;            // closest-hit and shadow rays
+  uint64_t invalid_samples = 0; // non-finite radiance dropped (reported, never silent)
+};
+
+struct PathSample {
+  Rgb radiance;  // everything, including `direct`
+  Rgb direct;    // emitters seen directly from the camera (kept out of gradient solves)
+};
+
+PathSample trace_path(const FrameScene& scene, const PathTracerSettings& settings, const Ray& camera_ray,
+                      Sampler& sampler, PathCounters& counters);
+
+}  // namespace gdvr

@@ -1,0 +1,51 @@
+#include "core/render/perspective_camera.h"
+
+#include <cmath>
+
+namespace gdvr {
+
+float fov_x_degrees(const Camera& camera, int width, int height) {
+  double aspect = double(width) / double(height);
+  double t = std::tan(double(radians(camera.fov)) * 0.5);
+  FovAxis axis = camera.fov_axis;
+  if (axis == FovAxis::kSmaller) axis = aspect > 1 ? FovAxis::kY : FovAxis::kX;
+  if (axis == FovAxis::kLarger) axis = aspect > 1 ? FovAxis::kX : FovAxis::kY;
+  double tx = t;
+  if (axis == FovAxis::kY) tx = t * aspect;
+  if (axis == FovAxis::kDiagonal) tx = t / std::sqrt(1.0 + 1.0 / (aspect * aspect));
+  return float(2.0 * std::atan(tx) * 180.0 / M_PI);
+}
+
+PerspectiveCamera::PerspectiveCamera(const Camera& camera, int width, int height)
+    : to_world_(camera.to_world), to_camera_(camera.to_world.inverse()), width_(width), height_(height) {
+  origin_ = to_world_.point(Vec3f(0.0f));
+  inv_width_ = 1.0f / float(width);
+  inv_height_ = 1.0f / float(height);
+  tan_half_x_ = std::tan(radians(fov_x_degrees(camera, width, height)) * 0.5f);
+  tan_half_y_ = tan_half_x_ * float(height) / float(width);
+  near_ = camera.near_clip;
+  far_ = camera.far_clip;
+}
+
+Ray PerspectiveCamera::generate_ray(Vec2f film) const {
+  float sx = film.x * inv_width_, sy = film.y * inv_height_;
+  Vec3f local = normalize(Vec3f((1.0f - 2.0f * sx) * tan_half_x_, (1.0f - 2.0f * sy) * tan_half_y_, 1.0f));
+  Ray ray;
+  ray.o = origin_;
+  ray.d = normalize(to_world_.vector(local));
+  float inv_z = 1.0f / local.z;
+  ray.tmin = near_ * inv_z;
+  ray.tmax = far_ * inv_z;
+  return ray;
+}
+
+bool PerspectiveCamera::project(Vec3f p, Vec2f* film) const {
+  Vec3f local = to_camera_.point(p);
+  if (!(local.z > near_)) return false;
+  float sx = 0.5f * (1.0f - local.x / (local.z * tan_half_x_));
+  float sy = 0.5f * (1.0f - local.y / (local.z * tan_half_y_));
+  *film = {sx * float(width_), sy * float(height_)};
+  return film->x >= 0 && film->y >= 0 && film->x < float(width_) && film->y < float(height_);
+}
+
+}  // namespace gdvr

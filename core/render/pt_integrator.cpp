@@ -1,0 +1,99 @@
+#include "core/render/pt_integrator.h"
+
+#include <chrono>
+#include <vector>
+
+#include "core/render/perspective_camera.h"
+#include "core/render/tile_scheduler.h"
+
+namespace gdvr {
+namespace {
+
+// Per-pixel running sums in double so that thousands of samples of very
+// different magnitude accumulate without loss.
+struct PixelSums {
+  double sum[3] = {0, 0, 0}, sum_sq[3] = {0, 0, 0}, direct[3] = {0, 0, 0};
+};
+
+}  // namespace
+
+Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const FrameRenderSettings& settings,
+                                            uint32_t frame, const FrameRenderControl& control) {
+  const int w = settings.width, h = settings.height;
+  if (w <= 0 || h <= 0) return invalid_argument("render resolution must be positive");
+  if (settings.spp <= 0) return invalid_argument("spp must be positive");
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+
+  PerspectiveCamera camera(scene.scene().camera, w, h);
+  std::vector<PixelSums> sums(size_t(w) * h);
+  std::atomic<uint64_t> rays{0}, invalid{0};
+  int spp_done = 0;
+
+  // Passes: one pass of `spp` samples in spp mode; in time-budget mode passes
+  // of `spp` samples each until the next pass would overrun the budget.
+  const bool timed = settings.time_budget_s > 0;
+  double last_pass_seconds = 0;
+  while (true) {
+    const int first = spp_done, count = settings.spp;
+    const double pass_start = elapsed();
+    TileRunOptions opts;
+    opts.threads = settings.threads;
+    opts.tile_size = settings.tile_size;
+    opts.cancel = control.cancel;
+    if (control.on_progress) {
+      opts.on_progress = [&](double f) {
+        double overall = timed ? std::min(1.0, (elapsed()) / settings.time_budget_s) : f;
+        control.on_progress(overall);
+      };
+    }
+    Status st = run_tiles(w, h, opts, [&](const Tile& tile) {
+      PathCounters counters;
+      for (int y = tile.y0; y < tile.y1; ++y)
+        for (int x = tile.x0; x < tile.x1; ++x) {
+          PixelSums& ps = sums[size_t(y) * w + x];
+          for (int s = first; s < first + count; ++s) {
+            Sampler sampler(settings.seed, frame, uint32_t(x), uint32_t(y), uint32_t(s));
+            Vec2f jitter = sampler.next_2d();  // box filter: uniform within the pixel
+            Ray ray = camera.generate_ray({float(x) + jitter.x, float(y) + jitter.y});
+            PathSample ls = trace_path(scene, settings.path, ray, sampler, counters);
+            for (int c = 0; c < 3; ++c) {
+              ps.sum[c] += ls.radiance[c];
+              ps.sum_sq[c] += double(ls.radiance[c]) * ls.radiance[c];
+              ps.direct[c] += ls.direct[c];
+            }
+          }
+        }
+      rays += counters.rays;
+      invalid += counters.invalid_samples;
+    });
+    if (!st.ok()) return st;
+    spp_done += count;
+    last_pass_seconds = elapsed() - pass_start;
+    if (!timed || elapsed() + last_pass_seconds > settings.time_budget_s) break;
+  }
+
+  FrameRenderResult result;
+  result.color = Image(w, h, 3);
+  result.direct = Image(w, h, 3);
+  result.variance = Image(w, h, 3);
+  const double n = spp_done;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const PixelSums& ps = sums[size_t(y) * w + x];
+      for (int c = 0; c < 3; ++c) {
+        double mean = ps.sum[c] / n;
+        result.color.at(x, y, c) = float(mean);
+        result.direct.at(x, y, c) = float(ps.direct[c] / n);
+        double var = n > 1 ? std::max(0.0, (ps.sum_sq[c] / n - mean * mean) / (n - 1)) : 0.0;
+        result.variance.at(x, y, c) = float(var);
+      }
+    }
+  result.spp = spp_done;
+  result.rays = rays;
+  result.invalid_samples = invalid;
+  result.seconds = elapsed();
+  return result;
+}
+
+}  // namespace gdvr

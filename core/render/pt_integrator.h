@@ -1,0 +1,42 @@
+// The frame integrator for plain path tracing: tiles, sample budget (spp or
+// wall time), statistics. Produces the final image plus diagnostic layers.
+#pragma once
+
+#include <atomic>
+#include <functional>
+
+#include "core/image/image.h"
+#include "core/render/frame_scene.h"
+#include "core/render/path_tracer.h"
+
+namespace gdvr {
+
+struct FrameRenderSettings {
+  int width = 0, height = 0;
+  int spp = 4;
+  double time_budget_s = 0;    // > 0: render passes until the budget is spent (spp is then the pass size)
+  uint64_t seed = 0;
+  int threads = 0;
+  int tile_size = 16;
+  PathTracerSettings path;
+};
+
+struct FrameRenderResult {
+  Image color;         // mean radiance, 3 channels
+  Image direct;        // emitters seen directly (part of color)
+  Image variance;      // per-pixel variance of the mean, per channel
+  int spp = 0;         // samples per pixel actually taken
+  uint64_t rays = 0;
+  uint64_t invalid_samples = 0;
+  double seconds = 0;
+};
+
+struct FrameRenderControl {
+  const std::atomic<bool>* cancel = nullptr;
+  std::function<void(double fraction)> on_progress;
+};
+
+Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const FrameRenderSettings& settings,
+                                            uint32_t frame, const FrameRenderControl& control);
+
+}  // namespace gdvr

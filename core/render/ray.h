@@ -1,0 +1,42 @@
+// Rays and surface interactions shared by the integrators.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include "core/math/frame.h"
+#include "core/math/vec.h"
+
+namespace gdvr {
+
+constexpr float kInfinity = std::numeric_limits<float>::infinity();
+// Mitsuba's ray epsilons (float): offsets scale with the magnitude of the
+// position, so scenes at 1e-4 and 1e5 scale both work.
+constexpr float kRayEpsilon = 8.940697e-05f;   // 1500 float ulps at 1
+constexpr float kShadowEpsilon = kRayEpsilon * 10.0f;
+
+struct Ray {
+  Vec3f o, d;
+  float tmin = 0, tmax = kInfinity;
+};
+
+struct SurfaceInteraction {
+  Vec3f p;          // world position
+  float t = 0;      // ray distance
+  Vec3f n;          // geometric normal (unit, world; flipped with flip_normals)
+  Frame sh_frame;   // shading frame (z = interpolated shading normal)
+  Vec2f uv;
+  int shape = -1;
+  uint32_t prim = 0;
+  Vec3f wi;         // direction towards the ray origin, in the shading frame
+
+  // Offset origin for a ray leaving in direction d (Mitsuba's offset_p).
+  Vec3f offset_p(Vec3f d) const {
+    float mag = (1.0f + max_component(Vec3f(std::abs(p.x), std::abs(p.y), std::abs(p.z)))) * kRayEpsilon;
+    if (dot(n, d) < 0) mag = -mag;
+    return p + n * mag;
+  }
+  Ray spawn_ray(Vec3f d) const { return Ray{offset_p(d), d, 0.0f, kInfinity}; }
+};
+
+}  // namespace gdvr
