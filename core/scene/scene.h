@@ -62,6 +62,9 @@ struct Scene {
   std::vector<Emitter> emitters;
   Camera camera;
   RenderDefaults defaults;
+  // Problems the loader repaired or approximated (dropped degenerate triangles,
+  // recomputed NaN normals, a Gaussian rfilter rendered as box, ...), one line each.
+  std::vector<std::string> warnings;
 };
 
 }  // namespace gdvr
