@@ -1,0 +1,46 @@
+// gdvr-server's options: flags (and GDVR_* environment variables for secrets),
+// validated once at start-up.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/util/status.h"
+
+namespace gdvr::server {
+
+// Request limits: a request over one gets RESOURCE_EXHAUSTED naming the field.
+struct Limits {
+  int max_width = 8192;
+  int max_height = 8192;
+  int max_spp = 1 << 16;
+  size_t max_frames = 100000;
+  uint64_t max_upload_bytes = 256ull << 20;
+  int max_message_bytes = 8 << 20;  // inbound gRPC message size
+  size_t max_queue = 1000;          // queued (not yet running) jobs
+};
+
+struct ServerConfig {
+  std::string listen = "127.0.0.1:50051";  // "host:0" picks a free port
+  std::string port_file;                   // when set, the bound port is written here
+  std::string asset_root = ".";            // jobs name scenes under it
+  std::string output_root = "gdvr-output"; // <output_root>/<job id>/frame_0001.exr
+  std::string db_path;                     // default: <output_root>/gdvr.db
+  int concurrency = 1;                     // jobs rendering at once
+  int threads = 0;                         // render threads in all; 0: all cores
+  Limits limits;
+  std::vector<std::string> tokens;         // accepted bearer tokens; empty: no auth
+  std::string tls_cert, tls_key, tls_ca;   // TLS when cert+key; mTLS when also CA
+  double shutdown_grace_s = 10;            // Shutdown() deadline on SIGTERM
+  int keepalive_time_s = 30;               // server pings idle streams this often
+};
+
+// Parses argv; `--help` yields a kFailedPrecondition status carrying the usage.
+Expected<ServerConfig> parse_server_flags(int argc, char** argv);
+std::string server_usage();
+
+// Reads tokens (one per line, '#' comments) from a file.
+Expected<std::vector<std::string>> read_token_file(const std::string& path);
+
+}  // namespace gdvr::server

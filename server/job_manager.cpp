@@ -1,0 +1,674 @@
+#include "server/job_manager.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "core/io/image_io.h"
+#include "server/log.h"
+#include "server/status_map.h"
+#include "server/translate.h"
+
+namespace gdvr::server {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr size_t kChunkBytes = 1 << 20;  // the API promises chunks of at most 1 MiB
+
+int64_t now_ms() {
+  using namespace std::chrono;
+  return duration_cast<milliseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+std::string new_job_id() {
+  static std::mutex mu;
+  static std::mt19937_64 rng(std::random_device{}() ^ uint64_t(now_ms()));
+  std::lock_guard<std::mutex> lock(mu);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "job-%016llx", static_cast<unsigned long long>(rng()));
+  return buf;
+}
+
+bool is_terminal(v1::JobState s) {
+  return s == v1::JOB_STATE_COMPLETED || s == v1::JOB_STATE_FAILED || s == v1::JOB_STATE_CANCELLED;
+}
+
+const char* state_name(v1::JobState s) {
+  switch (s) {
+    case v1::JOB_STATE_QUEUED: return "queued";
+    case v1::JOB_STATE_RUNNING: return "running";
+    case v1::JOB_STATE_COMPLETED: return "completed";
+    case v1::JOB_STATE_FAILED: return "failed";
+    case v1::JOB_STATE_CANCELLED: return "cancelled";
+    default: return "unspecified";
+  }
+}
+
+bool read_file(const std::string& path, std::string* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  *out = ss.str();
+  return bool(in) || in.eof();
+}
+
+// Writes through a temporary file and rename so readers never see half a file.
+bool write_file_atomic(const std::string& path, const std::string& data) {
+  std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) return false;
+    out.write(data.data(), std::streamsize(data.size()));
+    if (!out) return false;
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  return !ec;
+}
+
+// True when `path` (made absolute, "..", symlinks resolved as far as they
+// exist) lies inside `root`.
+bool is_inside(const fs::path& root, const fs::path& path) {
+  std::error_code ec;
+  fs::path r = fs::weakly_canonical(fs::absolute(root), ec);
+  fs::path p = fs::weakly_canonical(fs::absolute(path), ec);
+  auto rel = p.lexically_relative(r);
+  return !rel.empty() && *rel.begin() != ".." && !rel.is_absolute();
+}
+
+}  // namespace
+
+std::string frame_file_name(int frame) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "frame_%04d.exr", frame);
+  return buf;
+}
+
+JobManager::JobManager(ServerConfig config, std::unique_ptr<JobStore> store)
+    : config_(std::move(config)), store_(std::move(store)) {}
+
+JobManager::~JobManager() { shutdown(); }
+
+std::string JobManager::job_dir(const std::string& id) const { return config_.output_root + "/" + id; }
+
+// ---- Validation ----
+
+Status JobManager::validate(const v1::JobSpec& spec, JobSpec* core_job, std::vector<int>* frames) const {
+  const Limits& lim = config_.limits;
+  if (spec.scene().empty()) return invalid_argument("scene: missing (a .xml path under the asset root)");
+  if (spec.has_width() && spec.width() < 0) return invalid_argument("width: must be >= 0");
+  if (spec.has_height() && spec.height() < 0) return invalid_argument("height: must be >= 0");
+  if (spec.width() > lim.max_width)
+    return resource_exhausted("width: " + std::to_string(spec.width()) + " exceeds the server limit of " +
+                              std::to_string(lim.max_width));
+  if (spec.height() > lim.max_height)
+    return resource_exhausted("height: " + std::to_string(spec.height()) + " exceeds the server limit of " +
+                              std::to_string(lim.max_height));
+  if (spec.has_spp() && spec.spp() < 0) return invalid_argument("spp: must be >= 0");
+  if (spec.spp() > lim.max_spp)
+    return resource_exhausted("spp: " + std::to_string(spec.spp()) + " exceeds the server limit of " +
+                              std::to_string(lim.max_spp));
+  // Scene paths are relative to the asset root; anything escaping it (.., an
+  // absolute path, a symlink out) is refused before core touches the file.
+  fs::path scene = spec.scene();
+  fs::path resolved = scene.is_absolute() ? scene : fs::path(config_.asset_root) / scene;
+  if (!is_inside(config_.asset_root, resolved))
+    return invalid_argument("scene: '" + spec.scene() + "' is outside the asset root");
+  std::error_code ec;
+  if (!fs::is_regular_file(resolved, ec)) return not_found("scene: '" + spec.scene() + "' does not exist");
+
+  auto core = to_core_job(spec);
+  if (!core.ok()) return core.status();
+  auto parsed = parse_frame_range(core->frames, lim.max_frames);
+  if (!parsed.ok()) {
+    const Status& s = parsed.status();
+    return Status(s.code(), "frames: " + s.message());
+  }
+  if (parsed->empty()) return invalid_argument("frames: '" + core->frames + "' names no frame");
+  if (parsed->size() > lim.max_frames)
+    return resource_exhausted("frames: " + std::to_string(parsed->size()) + " frames exceed the server limit of " +
+                              std::to_string(lim.max_frames));
+  JobRunOptions opts;
+  opts.base_dir = config_.asset_root;
+  opts.asset_root = config_.asset_root;
+  GDVR_RETURN_IF_ERROR(validate_job(*core, opts));
+  if (core_job) *core_job = std::move(*core);
+  if (frames) *frames = std::move(*parsed);
+  return Status::Ok();
+}
+
+// ---- Registry ----
+
+Status JobManager::recover() {
+  std::error_code ec;
+  fs::create_directories(config_.output_root, ec);
+  auto stored = store_->load_all();
+  if (!stored.ok()) return stored.status();
+  std::lock_guard<std::mutex> lock(mu_);
+  for (auto& s : *stored) {
+    auto job = std::make_unique<Job>();
+    job->id = s.id;
+    job->idempotency_key = s.idempotency_key;
+    job->seq = s.seq;
+    job->priority = s.priority;
+    job->state = v1::JobState(s.state);
+    job->spec_json = s.spec_json;
+    job->reason = s.reason;
+    job->reason_code = s.reason_code;
+    job->created_ms = s.created_ms;
+    job->started_ms = s.started_ms;
+    job->finished_ms = s.finished_ms;
+    for (auto& f : s.frames) {
+      FrameRecord rec;
+      rec.file = f.file;
+      rec.size = f.size;
+      rec.stats.ParseFromString(f.stats_pb);
+      job->final_frames[f.frame] = std::move(rec);
+    }
+    next_seq_ = std::max(next_seq_, s.seq + 1);
+    if (!s.idempotency_key.empty()) by_key_[s.idempotency_key] = s.id;
+    Status st = Status::Ok();
+    auto spec = job_spec_from_json(s.spec_json, "stored job " + s.id);
+    if (spec.ok()) {
+      job->spec = *spec;
+      auto core = to_core_job(job->spec);
+      if (core.ok()) {
+        job->core = std::move(*core);
+        auto frames = parse_frame_range(job->core.frames);
+        if (frames.ok()) job->frames = std::move(*frames);
+        else st = frames.status();
+      } else {
+        st = core.status();
+      }
+    } else {
+      st = spec.status();
+    }
+    job->progress.set_frames_total(int(job->frames.size()));
+    job->progress.set_frames_done(int(job->final_frames.size()));
+    job->progress.set_fraction(job->frames.empty() ? 0 : double(job->final_frames.size()) / job->frames.size());
+    job->progress.set_eta_seconds(-1);
+    Job* j = job.get();
+    jobs_[s.id] = std::move(job);
+    if (is_terminal(j->state)) continue;
+    if (!st.ok()) {
+      finish_locked(j, v1::JOB_STATE_FAILED, "cannot resume: " + st.message(),
+                    grpc_code_name(to_grpc_code(st.code())));
+      continue;
+    }
+    // RUNNING at the time of a crash: back to the queue, resuming.
+    j->state = v1::JOB_STATE_QUEUED;
+    (void)persist_state_locked(*j);
+    log_event("info", "job_recovered", {{"job", j->id}, {"final_frames", std::to_string(j->final_frames.size())},
+                                        {"frames", std::to_string(j->frames.size())}});
+  }
+  return Status::Ok();
+}
+
+void JobManager::start() {
+  for (int i = 0; i < config_.concurrency; ++i) workers_.emplace_back([this] { worker_loop(); });
+}
+
+void JobManager::shutdown() {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stopping_ && workers_.empty()) return;
+    stopping_ = true;
+    for (auto& [id, job] : jobs_)
+      if (job->state == v1::JOB_STATE_RUNNING) job->cancel = true;
+  }
+  cv_.notify_all();
+  for (auto& w : workers_) w.join();
+  workers_.clear();
+}
+
+Expected<JobManager::Submitted> JobManager::submit(const std::string& key, const v1::JobSpec& spec) {
+  std::string spec_json = job_spec_to_json(spec);
+  auto existing = [&]() -> Expected<Submitted> {
+    const Job& j = *jobs_.at(by_key_.at(key));
+    if (j.spec_json != spec_json)
+      return failed_precondition("idempotency_key: '" + key + "' was already used for a different job (" + j.id +
+                                 ")");
+    return Submitted{to_proto_locked(j), true};
+  };
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (stopping_) return Status(StatusCode::kUnavailable, "server is shutting down");
+    if (!key.empty() && by_key_.count(key)) return existing();
+  }
+  // Validation loads the scene: done outside the lock so other calls proceed.
+  JobSpec core;
+  std::vector<int> frames;
+  GDVR_RETURN_IF_ERROR(validate(spec, &core, &frames));
+
+  std::lock_guard<std::mutex> lock(mu_);
+  if (!key.empty() && by_key_.count(key)) return existing();  // a concurrent retry won
+  size_t queued = 0;
+  for (const auto& [id, j] : jobs_) queued += j->state == v1::JOB_STATE_QUEUED;
+  if (queued >= config_.limits.max_queue)
+    return resource_exhausted("queue: " + std::to_string(queued) + " jobs are waiting (server limit " +
+                              std::to_string(config_.limits.max_queue) + "); retry later");
+  auto job = std::make_unique<Job>();
+  job->id = new_job_id();
+  job->idempotency_key = key;
+  job->spec = spec;
+  job->spec_json = spec_json;
+  job->core = std::move(core);
+  job->frames = std::move(frames);
+  job->priority = job->core.priority;
+  job->seq = next_seq_++;
+  job->created_ms = now_ms();
+  job->progress.set_frames_total(int(job->frames.size()));
+  job->progress.set_eta_seconds(-1);
+  StoredJob s;
+  s.id = job->id;
+  s.idempotency_key = key;
+  s.seq = job->seq;
+  s.priority = job->priority;
+  s.state = job->state;
+  s.spec_json = spec_json;
+  s.created_ms = job->created_ms;
+  GDVR_RETURN_IF_ERROR(store_->insert_job(s));
+  Job* j = job.get();
+  jobs_[j->id] = std::move(job);
+  if (!key.empty()) by_key_[key] = j->id;
+  log_event("info", "job_submitted", {{"job", j->id}, {"scene", j->spec.scene()}, {"frames", j->core.frames},
+                                      {"priority", std::to_string(j->priority)}});
+  Submitted out{to_proto_locked(*j), false};
+  cv_.notify_all();
+  return out;
+}
+
+Expected<v1::Job> JobManager::get(const std::string& id) const {
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = jobs_.find(id);
+  if (it == jobs_.end()) return not_found("job_id: no job '" + id + "'");
+  return to_proto_locked(*it->second);
+}
+
+Expected<v1::ListJobsResponse> JobManager::list(const v1::ListJobsRequest& req) const {
+  int page_size = req.page_size() <= 0 ? 50 : std::min(req.page_size(), 1000);
+  int64_t below = INT64_MAX;  // the token is the seq to continue below (newest first)
+  if (!req.page_token().empty()) {
+    char* end = nullptr;
+    below = std::strtoll(req.page_token().c_str(), &end, 10);
+    if (*end != '\0' || below <= 0) return invalid_argument("page_token: '" + req.page_token() + "' is not valid");
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  std::vector<const Job*> all;
+  for (const auto& [id, j] : jobs_) {
+    if (j->seq >= below) continue;
+    if (req.states_size() > 0 &&
+        std::find(req.states().begin(), req.states().end(), j->state) == req.states().end())
+      continue;
+    all.push_back(j.get());
+  }
+  std::sort(all.begin(), all.end(), [](const Job* a, const Job* b) { return a->seq > b->seq; });
+  v1::ListJobsResponse resp;
+  for (size_t i = 0; i < all.size() && int(i) < page_size; ++i) *resp.add_jobs() = to_proto_locked(*all[i]);
+  if (int(all.size()) > page_size) resp.set_next_page_token(std::to_string(all[size_t(page_size) - 1]->seq));
+  return resp;
+}
+
+Expected<v1::Job> JobManager::cancel(const std::string& id) {
+  std::unique_lock<std::mutex> lock(mu_);
+  auto it = jobs_.find(id);
+  if (it == jobs_.end()) return not_found("job_id: no job '" + id + "'");
+  Job* j = it->second.get();
+  if (is_terminal(j->state))
+    return failed_precondition("job '" + id + "' is already " + state_name(j->state));
+  if (j->state == v1::JOB_STATE_QUEUED) {
+    finish_locked(j, v1::JOB_STATE_CANCELLED, "cancelled by a client before it started", "CANCELLED");
+  } else {
+    j->cancel_requested = true;
+    j->cancel = true;  // run_job sees it at the next tile
+    log_event("info", "job_cancel_requested", {{"job", id}});
+  }
+  v1::Job out = to_proto_locked(*j);
+  cv_.notify_all();
+  return out;
+}
+
+// ---- Workers ----
+
+JobManager::Job* JobManager::pick_next_locked() {
+  Job* best = nullptr;
+  for (auto& [id, j] : jobs_) {
+    if (j->state != v1::JOB_STATE_QUEUED) continue;
+    if (!best || j->priority > best->priority || (j->priority == best->priority && j->seq < best->seq))
+      best = j.get();
+  }
+  return best;
+}
+
+void JobManager::worker_loop() {
+  for (;;) {
+    Job* job = nullptr;
+    {
+      std::unique_lock<std::mutex> lock(mu_);
+      cv_.wait(lock, [&] { return stopping_ || (job = pick_next_locked()) != nullptr; });
+      if (stopping_) return;
+      job->state = v1::JOB_STATE_RUNNING;
+      job->cancel = false;
+      if (job->started_ms == 0) job->started_ms = now_ms();
+      job->skipped.clear();
+      for (const auto& [f, rec] : job->final_frames) job->skipped.push_back(f);
+      (void)persist_state_locked(*job);
+    }
+    cv_.notify_all();
+    log_event("info", "job_started", {{"job", job->id}, {"skip_frames", std::to_string(job->skipped.size())}});
+    run(job);
+  }
+}
+
+void JobManager::run(Job* job) {
+  JobRunOptions opts;
+  int hw = int(std::thread::hardware_concurrency());
+  int threads = config_.threads > 0 ? config_.threads : hw;
+  opts.threads = config_.concurrency > 1 ? std::max(1, threads / config_.concurrency) : config_.threads;
+  opts.base_dir = config_.asset_root;
+  opts.asset_root = config_.asset_root;
+  opts.skip_frames = job->skipped;  // only this thread changes skipped while RUNNING
+  std::string dir = job_dir(job->id);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+
+  Status frame_error = Status::Ok();
+  JobCallbacks cb;
+  cb.on_frame_final = [&](const FrameOutput& out) {
+    if (!frame_error.ok()) return;
+    std::string name = frame_file_name(out.frame);
+    std::string path = dir + "/" + name;
+    Status st = write_exr(path, out.image);  // atomic: temporary file + rename
+    if (!st.ok()) {
+      frame_error = st.with_context("writing " + path + ": ");
+      job->cancel = true;
+      return;
+    }
+    FrameRecord rec;
+    rec.file = name;
+    rec.size = uint64_t(fs::file_size(path, ec));
+    to_proto(out.stats, &rec.stats);
+    rec.stats.set_frame(out.frame);
+    // Persist before announcing: a watcher must never be told about a frame
+    // that a restart would forget.
+    StoredFrame sf{out.frame, name, rec.size, rec.stats.SerializeAsString()};
+    st = store_->insert_frame(job->id, sf);
+    if (!st.ok()) {
+      frame_error = st;
+      job->cancel = true;
+      return;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      job->final_frames[out.frame] = rec;
+      job->progress.set_frames_done(int(job->final_frames.size()));
+      ++job->progress_seq;
+      write_stats_json(*job);
+    }
+    cv_.notify_all();
+    log_event("info", "frame_final",
+              {{"job", job->id}, {"frame", std::to_string(out.frame)},
+               {"render_s", std::to_string(out.stats.render_seconds)}, {"bytes", std::to_string(rec.size)}});
+  };
+  cb.on_progress = [&](const JobProgress& p) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      to_proto(p, &job->progress);
+      // Resumed runs count from zero in core; the job counts every final frame.
+      job->progress.set_frames_done(std::max(p.frames_done, int(job->final_frames.size())));
+      job->progress.set_frames_total(int(job->frames.size()));
+      ++job->progress_seq;
+    }
+    cv_.notify_all();
+  };
+
+  Status st = run_job(job->core, opts, cb, &job->cancel);
+
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!frame_error.ok()) {
+      finish_locked(job, v1::JOB_STATE_FAILED, frame_error.message(),
+                    grpc_code_name(to_grpc_code(frame_error.code())));
+    } else if (st.ok()) {
+      job->progress.set_fraction(1);
+      job->progress.set_eta_seconds(0);
+      finish_locked(job, v1::JOB_STATE_COMPLETED, "", "");
+    } else if (st.code() == StatusCode::kCancelled && !job->cancel_requested) {
+      // Shutdown: the frames so far are persisted; the next start resumes.
+      job->state = v1::JOB_STATE_QUEUED;
+      (void)persist_state_locked(*job);
+      log_event("info", "job_checkpointed", {{"job", job->id}, {"final_frames", std::to_string(job->final_frames.size())}});
+    } else if (st.code() == StatusCode::kCancelled) {
+      finish_locked(job, v1::JOB_STATE_CANCELLED, "cancelled by a client", "CANCELLED");
+    } else {
+      finish_locked(job, v1::JOB_STATE_FAILED, st.message(), grpc_code_name(to_grpc_code(st.code())));
+    }
+  }
+  cv_.notify_all();
+}
+
+void JobManager::finish_locked(Job* job, v1::JobState state, const std::string& reason, const std::string& code) {
+  job->state = state;
+  job->reason = reason;
+  job->reason_code = code;
+  job->finished_ms = now_ms();
+  Status st = persist_state_locked(*job);
+  if (!st.ok()) log_event("error", "persist_failed", {{"job", job->id}, {"error", st.message()}});
+  write_stats_json(*job);
+  log_event(state == v1::JOB_STATE_FAILED ? "warn" : "info", "job_finished",
+            {{"job", job->id}, {"state", state_name(state)}, {"reason", reason},
+             {"final_frames", std::to_string(job->final_frames.size())}});
+}
+
+Status JobManager::persist_state_locked(const Job& job) {
+  return store_->update_job(job.id, job.state, job.reason, job.reason_code, job.started_ms, job.finished_ms);
+}
+
+void JobManager::write_stats_json(const Job& job) const {
+  std::error_code ec;
+  if (!fs::is_directory(job_dir(job.id), ec)) return;
+  google::protobuf::util::JsonPrintOptions opts;
+  opts.preserve_proto_field_names = true;
+  opts.always_print_primitive_fields = true;
+  std::string out = "{\n  \"job_id\": \"" + job.id + "\",\n  \"state\": \"" + state_name(job.state) +
+                    "\",\n  \"frames_total\": " + std::to_string(job.frames.size()) +
+                    ",\n  \"frames_final\": " + std::to_string(job.final_frames.size()) + ",\n  \"frames\": [";
+  double total_s = 0;
+  bool first = true;
+  for (const auto& [f, rec] : job.final_frames) {
+    std::string js;
+    (void)google::protobuf::util::MessageToJsonString(rec.stats, &js, opts);
+    out += (first ? "\n    " : ",\n    ") + js;
+    first = false;
+    total_s += rec.stats.render_seconds();
+  }
+  out += "\n  ],\n  \"total_render_seconds\": " + std::to_string(total_s) + "\n}\n";
+  (void)write_file_atomic(job_dir(job.id) + "/stats.json", out);
+}
+
+int JobManager::queue_position_locked(const Job& job) const {
+  if (job.state != v1::JOB_STATE_QUEUED) return -1;
+  int pos = 0;
+  for (const auto& [id, j] : jobs_)
+    if (j->state == v1::JOB_STATE_QUEUED &&
+        (j->priority > job.priority || (j->priority == job.priority && j->seq < job.seq)))
+      ++pos;
+  return pos;
+}
+
+v1::Job JobManager::to_proto_locked(const Job& j) const {
+  v1::Job out;
+  out.set_id(j.id);
+  out.set_state(j.state);
+  *out.mutable_spec() = j.spec;
+  out.set_idempotency_key(j.idempotency_key);
+  out.set_priority(j.priority);
+  for (int f : j.frames) out.add_frames(f);
+  for (const auto& [f, rec] : j.final_frames) out.add_final_frames(f);
+  *out.mutable_progress() = j.progress;
+  out.set_reason(j.reason);
+  out.set_created_unix_ms(j.created_ms);
+  out.set_started_unix_ms(j.started_ms);
+  out.set_finished_unix_ms(j.finished_ms);
+  out.set_output_dir(job_dir(j.id));
+  out.set_queue_position(queue_position_locked(j));
+  return out;
+}
+
+// ---- Watching ----
+
+bool JobManager::send_frame(const Job& job, int frame, const FrameRecord& rec, bool raw,
+                            const std::function<bool(const v1::JobEvent&)>& send, const v1::Progress& progress) {
+  std::string path = job_dir(job.id) + "/" + rec.file;
+  std::string exr;
+  if (!read_file(path, &exr)) {
+    log_event("error", "frame_unreadable", {{"job", job.id}, {"frame", std::to_string(frame)}, {"path", path}});
+    return true;  // skip it rather than end the stream; GetJob still lists it
+  }
+  struct Payload {
+    v1::FrameFinal::Payload kind;
+    std::string bytes;
+  };
+  std::vector<Payload> payloads;
+  payloads.push_back({v1::FrameFinal::PAYLOAD_EXR, std::move(exr)});
+  int width = 0, height = 0;
+  if (raw) {
+    auto img = read_exr(path);
+    const ImageLayer* main = img.ok() ? img->find("") : nullptr;
+    if (main && main->image.channels() >= 3) {
+      const Image& im = main->image;
+      width = im.width();
+      height = im.height();
+      std::vector<float> rgb(im.pixel_count() * 3);
+      for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+          for (int c = 0; c < 3; ++c) rgb[(size_t(y) * width + x) * 3 + c] = im.at(x, y, c);
+      payloads.push_back({v1::FrameFinal::PAYLOAD_RAW_RGB_F32,
+                          std::string(reinterpret_cast<const char*>(rgb.data()), rgb.size() * sizeof(float))});
+    }
+  }
+  for (size_t p = 0; p < payloads.size(); ++p) {
+    const std::string& bytes = payloads[p].bytes;
+    size_t offset = 0;
+    do {
+      size_t n = std::min(kChunkBytes, bytes.size() - offset);
+      v1::JobEvent ev;
+      ev.set_job_id(job.id);
+      auto* ff = ev.mutable_frame_final();
+      ff->set_frame(frame);
+      ff->set_payload(payloads[p].kind);
+      ff->set_offset(offset);
+      ff->set_total_size(bytes.size());
+      ff->set_data(bytes.substr(offset, n));
+      ff->set_file_name(rec.file);
+      ff->set_width(width);
+      ff->set_height(height);
+      offset += n;
+      if (p + 1 == payloads.size() && offset == bytes.size()) {
+        ff->set_last(true);
+        *ff->mutable_stats() = rec.stats;
+        *ff->mutable_progress() = progress;
+      }
+      if (!send(ev)) return false;
+    } while (offset < bytes.size());
+  }
+  return true;
+}
+
+Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<bool(const v1::JobEvent&)>& send,
+                         const std::function<bool()>& client_gone) {
+  const Job* job = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    auto it = jobs_.find(req.job_id());
+    if (it == jobs_.end()) return not_found("job_id: no job '" + req.job_id() + "'");
+    job = it->second.get();  // jobs are never erased: the pointer stays valid
+  }
+  int next_frame = req.has_from_frame() ? req.from_frame() : INT32_MIN;
+  bool queued_sent = false, started_sent = false;
+  uint64_t progress_sent = 0;
+  for (;;) {
+    // Snapshot under the lock, send without it: a slow client must not stall
+    // the render.
+    v1::JobState state;
+    std::vector<std::pair<int, FrameRecord>> frames;
+    v1::Progress progress;
+    uint64_t progress_seq;
+    std::string reason, code;
+    int queue_pos;
+    bool started;
+    std::vector<int> skipped;
+    {
+      std::unique_lock<std::mutex> lock(mu_);
+      state = job->state;
+      for (auto it = job->final_frames.lower_bound(next_frame); it != job->final_frames.end(); ++it)
+        frames.emplace_back(it->first, it->second);
+      progress = job->progress;
+      progress_seq = job->progress_seq;
+      reason = job->reason;
+      code = job->reason_code;
+      queue_pos = queue_position_locked(*job);
+      skipped = job->skipped;
+      started = job->started_ms != 0;
+    }
+    v1::JobEvent ev;
+    ev.set_job_id(job->id);
+    if (state == v1::JOB_STATE_QUEUED && !queued_sent) {
+      ev.mutable_queued()->set_queue_position(queue_pos);
+      if (!send(ev)) return Status::Ok();
+      queued_sent = true;
+    }
+    if (state != v1::JOB_STATE_QUEUED && !started_sent && started) {
+      ev.Clear();
+      ev.set_job_id(job->id);
+      ev.mutable_started()->set_frames_total(progress.frames_total());
+      for (int f : skipped) ev.mutable_started()->add_skipped_frames(f);
+      if (!send(ev)) return Status::Ok();
+      started_sent = true;
+    }
+    for (const auto& [f, rec] : frames) {
+      if (!send_frame(*job, f, rec, req.include_raw_rgb(), send, progress)) return Status::Ok();
+      next_frame = f + 1;
+    }
+    if (is_terminal(state)) {
+      ev.Clear();
+      ev.set_job_id(job->id);
+      if (state == v1::JOB_STATE_COMPLETED) *ev.mutable_completed()->mutable_progress() = progress;
+      else if (state == v1::JOB_STATE_CANCELLED) ev.mutable_cancelled()->set_reason(reason);
+      else {
+        ev.mutable_failed()->set_reason(reason);
+        ev.mutable_failed()->set_code(code);
+      }
+      (void)send(ev);
+      return Status::Ok();
+    }
+    if (state == v1::JOB_STATE_RUNNING && progress_seq != progress_sent) {
+      ev.Clear();
+      ev.set_job_id(job->id);
+      *ev.mutable_frame_rendered()->mutable_progress() = progress;
+      if (!send(ev)) return Status::Ok();
+      progress_sent = progress_seq;
+    }
+    // ---- Wait for news ----
+    std::unique_lock<std::mutex> lock(mu_);
+    cv_.wait_for(lock, std::chrono::milliseconds(500), [&] {
+      if (stopping_ || job->state != state || job->progress_seq != progress_seq) return true;
+      auto it = job->final_frames.lower_bound(next_frame);
+      return it != job->final_frames.end();
+    });
+    if (stopping_) return Status(StatusCode::kUnavailable, "server is shutting down; watch again to resume");
+    lock.unlock();
+    if (client_gone()) return cancelled("client went away");
+  }
+}
+
+}  // namespace gdvr::server

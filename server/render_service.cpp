@@ -1,0 +1,108 @@
+#include "server/render_service.h"
+
+#include "server/log.h"
+#include "server/scene_upload.h"
+#include "server/status_map.h"
+#include "server/translate.h"
+
+namespace gdvr::server {
+namespace {
+
+grpc::Status logged(const char* rpc, const std::string& job, const grpc::Status& st) {
+  if (!st.ok())
+    log_event("warn", "rpc_error", {{"rpc", rpc}, {"job", job}, {"code", grpc_code_name(st.error_code())},
+                                    {"message", st.error_message()}});
+  return st;
+}
+
+}  // namespace
+
+grpc::Status RenderServiceImpl::check_auth(grpc::ServerContext* ctx) const {
+  if (auth_ && !auth_->allowed(ctx))
+    return grpc::Status(grpc::StatusCode::UNAUTHENTICATED, "missing or invalid bearer token");
+  return grpc::Status::OK;
+}
+
+grpc::Status RenderServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
+                                          v1::SubmitJobResponse* resp) {
+  if (auto st = check_auth(ctx); !st.ok()) return st;
+  if (req->idempotency_key().size() > 256)
+    return logged("SubmitJob", "", grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                                                "idempotency_key: longer than 256 characters"));
+  v1::JobSpec spec;
+  if (req->has_job()) {
+    spec = req->job();
+  } else if (req->spec_case() == v1::SubmitJobRequest::kJobJson) {
+    auto parsed = job_spec_from_json(req->job_json(), "job_json");
+    if (!parsed.ok()) return logged("SubmitJob", "", to_grpc_status(parsed.status()));
+    spec = std::move(*parsed);
+  } else {
+    return logged("SubmitJob", "", grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "job: missing (set job or job_json)"));
+  }
+  auto submitted = jobs_->submit(req->idempotency_key(), spec);
+  if (!submitted.ok()) return logged("SubmitJob", "", to_grpc_status(submitted.status()));
+  resp->set_job_id(submitted->job.id());
+  resp->set_existing(submitted->existing);
+  *resp->mutable_job() = std::move(submitted->job);
+  return grpc::Status::OK;
+}
+
+grpc::Status RenderServiceImpl::WatchJob(grpc::ServerContext* ctx, const v1::WatchJobRequest* req,
+                                         grpc::ServerWriter<v1::JobEvent>* writer) {
+  if (auto st = check_auth(ctx); !st.ok()) return st;
+  log_event("info", "watch_started", {{"job", req->job_id()}, {"peer", ctx->peer()}});
+  Status st = jobs_->watch(
+      *req, [&](const v1::JobEvent& ev) { return writer->Write(ev); }, [&] { return ctx->IsCancelled(); });
+  log_event("info", "watch_ended", {{"job", req->job_id()}, {"peer", ctx->peer()}, {"status", st.to_string()}});
+  return logged("WatchJob", req->job_id(), to_grpc_status(st));
+}
+
+grpc::Status RenderServiceImpl::GetJob(grpc::ServerContext* ctx, const v1::GetJobRequest* req, v1::Job* resp) {
+  if (auto st = check_auth(ctx); !st.ok()) return st;
+  auto job = jobs_->get(req->job_id());
+  if (!job.ok()) return logged("GetJob", req->job_id(), to_grpc_status(job.status()));
+  *resp = std::move(*job);
+  return grpc::Status::OK;
+}
+
+grpc::Status RenderServiceImpl::ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequest* req,
+                                         v1::ListJobsResponse* resp) {
+  if (auto st = check_auth(ctx); !st.ok()) return st;
+  auto list = jobs_->list(*req);
+  if (!list.ok()) return logged("ListJobs", "", to_grpc_status(list.status()));
+  *resp = std::move(*list);
+  return grpc::Status::OK;
+}
+
+grpc::Status RenderServiceImpl::CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRequest* req,
+                                          v1::Job* resp) {
+  if (auto st = check_auth(ctx); !st.ok()) return st;
+  auto job = jobs_->cancel(req->job_id());
+  if (!job.ok()) return logged("CancelJob", req->job_id(), to_grpc_status(job.status()));
+  *resp = std::move(*job);
+  return grpc::Status::OK;
+}
+
+grpc::Status RenderServiceImpl::UploadScene(grpc::ServerContext* ctx,
+                                            grpc::ServerReader<v1::UploadSceneChunk>* reader,
+                                            v1::UploadSceneResponse* resp) {
+  if (auto st = check_auth(ctx); !st.ok()) return st;
+  SceneBundleWriter bundle(config_.asset_root, config_.limits.max_upload_bytes);
+  v1::UploadSceneChunk chunk;
+  while (reader->Read(&chunk)) {
+    Status st = bundle.add(chunk.scene_file(), chunk.path(), chunk.data());
+    // Returning early ends the call; the client's remaining writes fail fast.
+    if (!st.ok()) return logged("UploadScene", "", to_grpc_status(st));
+  }
+  auto done = bundle.finish();
+  if (!done.ok()) return logged("UploadScene", "", to_grpc_status(done.status()));
+  resp->set_bundle_hash(done->hash);
+  resp->set_scene(done->scene);
+  resp->set_total_bytes(done->total_bytes);
+  resp->set_files(done->files);
+  log_event("info", "scene_uploaded", {{"hash", done->hash}, {"bytes", std::to_string(done->total_bytes)},
+                                       {"files", std::to_string(done->files)}});
+  return grpc::Status::OK;
+}
+
+}  // namespace gdvr::server

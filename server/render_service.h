@@ -1,0 +1,37 @@
+// gdvr.v1.RenderService: thin adapters from proto requests to JobManager.
+#pragma once
+
+#include <memory>
+
+#include "gdvr/v1/render_service.grpc.pb.h"
+#include "server/auth.h"
+#include "server/config.h"
+#include "server/job_manager.h"
+
+namespace gdvr::server {
+
+class RenderServiceImpl final : public v1::RenderService::Service {
+ public:
+  RenderServiceImpl(JobManager* jobs, std::shared_ptr<TokenAuth> auth, const ServerConfig& config)
+      : jobs_(jobs), auth_(std::move(auth)), config_(config) {}
+
+  grpc::Status SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
+                         v1::SubmitJobResponse* resp) override;
+  grpc::Status WatchJob(grpc::ServerContext* ctx, const v1::WatchJobRequest* req,
+                        grpc::ServerWriter<v1::JobEvent>* writer) override;
+  grpc::Status GetJob(grpc::ServerContext* ctx, const v1::GetJobRequest* req, v1::Job* resp) override;
+  grpc::Status ListJobs(grpc::ServerContext* ctx, const v1::ListJobsRequest* req,
+                        v1::ListJobsResponse* resp) override;
+  grpc::Status CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRequest* req, v1::Job* resp) override;
+  grpc::Status UploadScene(grpc::ServerContext* ctx, grpc::ServerReader<v1::UploadSceneChunk>* reader,
+                           v1::UploadSceneResponse* resp) override;
+
+ private:
+  grpc::Status check_auth(grpc::ServerContext* ctx) const;
+
+  JobManager* jobs_;
+  std::shared_ptr<TokenAuth> auth_;
+  const ServerConfig& config_;
+};
+
+}  // namespace gdvr::server

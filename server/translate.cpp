@@ -1,0 +1,86 @@
+#include "server/translate.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <nlohmann/json.hpp>
+
+namespace gdvr::server {
+namespace {
+
+// Finds the first JSON key (dotted path) that `desc` does not declare, so the
+// error names it; protobuf's own message ("Cannot find field.") does not.
+std::string find_unknown_field(const nlohmann::json& j, const google::protobuf::Descriptor* desc,
+                               const std::string& prefix) {
+  if (!j.is_object() || !desc) return "";
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const auto* field = desc->FindFieldByName(it.key());
+    if (!field) {  // protobuf JSON also accepts lowerCamelCase names
+      for (int i = 0; i < desc->field_count() && !field; ++i)
+        if (desc->field(i)->json_name() == it.key()) field = desc->field(i);
+    }
+    std::string path = prefix.empty() ? it.key() : prefix + "." + it.key();
+    if (!field) return path;
+    if (field->is_map()) continue;
+    if (field->message_type()) {
+      if (field->is_repeated() && it->is_array()) {
+        for (size_t i = 0; i < it->size(); ++i) {
+          auto u = find_unknown_field((*it)[i], field->message_type(), path + "[" + std::to_string(i) + "]");
+          if (!u.empty()) return u;
+        }
+      } else {
+        auto u = find_unknown_field(*it, field->message_type(), path);
+        if (!u.empty()) return u;
+      }
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string job_spec_to_json(const v1::JobSpec& spec) {
+  google::protobuf::util::JsonPrintOptions opts;
+  opts.preserve_proto_field_names = true;
+  std::string text;
+  (void)google::protobuf::util::MessageToJsonString(spec, &text, opts);
+  auto j = nlohmann::json::parse(text, nullptr, /* allow_exceptions = */ false);
+  if (j.is_object() && j.contains("seed") && j["seed"].is_string())
+    j["seed"] = std::stoull(j["seed"].get<std::string>());
+  return j.dump(2);
+}
+
+Expected<v1::JobSpec> job_spec_from_json(const std::string& json_text, const std::string& origin) {
+  auto j = nlohmann::json::parse(json_text, nullptr, /* allow_exceptions = */ false);
+  if (j.is_discarded()) return invalid_argument(origin + ": not valid JSON");
+  if (!j.is_object()) return invalid_argument(origin + ": a job file is a JSON object");
+  std::string unknown = find_unknown_field(j, v1::JobSpec::descriptor(), "");
+  if (!unknown.empty()) return invalid_argument(origin + ": unknown field '" + unknown + "'");
+  v1::JobSpec spec;
+  auto st = google::protobuf::util::JsonStringToMessage(json_text, &spec);
+  if (!st.ok()) return invalid_argument(origin + ": " + std::string(st.message()));
+  return spec;
+}
+
+Expected<JobSpec> to_core_job(const v1::JobSpec& spec) { return parse_job_json(job_spec_to_json(spec), "job"); }
+
+void to_proto(const FrameStats& s, v1::FrameStats* out) {
+  out->set_frame(s.frame);
+  out->set_render_seconds(s.render_seconds);
+  out->set_reconstruct_seconds(s.reconstruct_seconds);
+  out->set_spp(s.spp);
+  out->set_samples(s.samples);
+  out->set_rays(s.rays);
+  out->set_samples_per_second(s.samples_per_second);
+  out->set_rays_per_second(s.rays_per_second);
+  for (const auto& l : s.left_out) out->add_left_out(l);
+  out->set_rel_mse(s.rel_mse);
+}
+
+void to_proto(const JobProgress& p, v1::Progress* out) {
+  out->set_frames_done(p.frames_done);
+  out->set_frames_total(p.frames_total);
+  out->set_fraction(p.fraction);
+  out->set_eta_seconds(p.eta_seconds);
+}
+
+}  // namespace gdvr::server
