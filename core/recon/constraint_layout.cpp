@@ -1,0 +1,109 @@
+#include "core/recon/constraint_layout.h"
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <sstream>
+
+namespace gdvr {
+
+int64_t ConstraintLayout::total_non_finite() const {
+  int64_t n = 0;
+  for (int64_t v : non_finite) n += v;
+  return n;
+}
+
+std::string ConstraintLayout::to_string() const {
+  std::ostringstream s;
+  s << grid.width << "x" << grid.height << "x" << grid.frames << " channels=" << channels;
+  for (Term t : kAllTerms)
+    if (present(t))
+      s << " " << term_name(t) << "(non_finite=" << non_finite[term_index(t)] << " masked=" << masked[term_index(t)]
+        << ")";
+  return s.str();
+}
+
+ConstraintLayout build_constraint_layout(const GradientWindow& window) {
+  ConstraintLayout L;
+  L.grid = {window.width(), window.height(), window.size()};
+  L.channels = window.channels();
+  const Grid& g = L.grid;
+  const int C = L.channels;
+  for (Term term : kAllTerms) {
+    const int k = term_index(term);
+    bool any_buffer = false;
+    for (int t = 0; t < g.frames; ++t) any_buffer |= window.frames[t]->has(term);
+    if (!any_buffer) continue;
+    std::vector<uint8_t>& valid = L.valid[k];
+    valid.assign(g.size(), 0);
+    std::atomic<int64_t> non_finite{0}, masked{0};
+    tbb::parallel_for(0, g.frames, [&](int t) {
+      const GradientFrame& f = *window.frames[t];
+      if (!f.has(term)) return;
+      if (is_temporal(term) && t + 1 >= g.frames) return;  // reaches outside the window
+      const float* v = f.buffer(term).data().data();
+      const float* var = f.has(term) && !f.variance(term).empty() ? f.variance(term).data().data() : nullptr;
+      const std::vector<uint8_t>& user = f.mask(term);
+      int64_t nf = 0, mk = 0;
+      const int x_end = uses_x_neighbour(term) ? g.width - 1 : g.width;
+      const int y_end = uses_y_neighbour(term) ? g.height - 1 : g.height;
+      for (int y = 0; y < y_end; ++y)
+        for (int x = 0; x < x_end; ++x) {
+          const size_t p = size_t(y) * g.width + x;
+          if (!user.empty() && !user[p]) {
+            ++mk;
+            continue;
+          }
+          bool finite = true;
+          for (int c = 0; c < C; ++c) {
+            finite &= std::isfinite(v[p * C + c]);
+            if (var) finite &= std::isfinite(var[p * C + c]) && var[p * C + c] >= 0;
+          }
+          if (!finite) {
+            ++nf;
+            continue;
+          }
+          valid[g.index(x, y, t)] = 1;
+        }
+      non_finite += nf;
+      masked += mk;
+    });
+    L.non_finite[k] = non_finite;
+    L.masked[k] = masked;
+    if (is_temporal(term)) L.temporal = true;
+  }
+  return L;
+}
+
+namespace {
+Field gather(const GradientWindow& window, const ConstraintLayout& L, Term term, int c, bool variance) {
+  const Grid& g = L.grid;
+  const std::vector<uint8_t>& valid = L.mask(term);
+  Field out(g.size(), 0.0f);
+  if (valid.empty()) return out;
+  const int C = L.channels;
+  tbb::parallel_for(0, g.frames, [&](int t) {
+    const GradientFrame& f = *window.frames[t];
+    const Image& img = variance ? f.variance(term) : f.buffer(term);
+    if (img.empty()) return;
+    const float* v = img.data().data();
+    const size_t base = size_t(t) * g.frame_size();
+    for (size_t p = 0; p < g.frame_size(); ++p)
+      if (valid[base + p]) out[base + p] = v[p * C + c];
+  });
+  return out;
+}
+}  // namespace
+
+Field gather_term(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c) {
+  return gather(window, layout, t, c, /* variance = */ false);
+}
+
+Field gather_variance(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c) {
+  for (const auto& f : window.frames)
+    if (!f->variance(t).empty()) return gather(window, layout, t, c, /* variance = */ true);
+  return {};
+}
+
+}  // namespace gdvr

@@ -1,0 +1,43 @@
+// Which constraints of a window exist, per term and pixel, independent of the
+// colour channel. A constraint is dropped when it reaches outside the image or
+// window (REFERENCE.md §5), when the caller's mask drops it (failed motion
+// vectors, §4), or when its value or variance is NaN/Inf (or the variance is
+// negative) in any channel: one bad sample must never poison the solve.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/recon/grid.h"
+#include "core/recon/gradient_window.h"
+
+namespace gdvr {
+
+struct ConstraintLayout {
+  Grid grid;
+  int channels = 0;
+  // Planar (Grid::index) 0/1 per term; empty when the term has no buffer.
+  std::array<std::vector<uint8_t>, kTermCount> valid;
+  // Counts of constraints dropped because of non-finite data / caller masks.
+  std::array<int64_t, kTermCount> non_finite{};
+  std::array<int64_t, kTermCount> masked{};
+  bool temporal = false;  // any temporal constraint survives
+
+  bool present(Term t) const { return !valid[term_index(t)].empty(); }
+  const std::vector<uint8_t>& mask(Term t) const { return valid[term_index(t)]; }
+  int64_t total_non_finite() const;
+  std::string to_string() const;
+};
+
+// Requires window.validate() to have passed.
+ConstraintLayout build_constraint_layout(const GradientWindow& window);
+
+// Channel `c` of term `t` in planar layout, 0 where the constraint is invalid
+// (so every value the solvers read is finite).
+Field gather_term(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c);
+// Same for the variances; empty if the term has no variance buffer.
+Field gather_variance(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c);
+
+}  // namespace gdvr

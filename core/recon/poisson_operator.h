@@ -1,0 +1,54 @@
+// The matrix-free normal-equations operator of the (weighted) screened Poisson
+// objective of REFERENCE.md §5 over one channel of a window:
+//
+//   E(x) = Σ_p w_primal(p) (x(p) − g(p))² + Σ_{term} Σ_p w_term(p) ((H_term x)(p) − d_term(p))²
+//   A = W_primal + Σ H_termᵀ W_term H_term,   b = W_primal g + Σ H_termᵀ W_term d_term.
+//
+// The L2 solve uses per-term constant weights (α² for the primal), the L1
+// IRLS solve per-constraint weights 1/(|r| + ε). A is applied directly on the
+// planar arrays as a 3×3×3 stencil (never assembled), in parallel with TBB.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/recon/grid.h"
+#include "core/recon/term.h"
+
+namespace gdvr {
+
+class PoissonSystem {
+ public:
+  // Zero weights for every term; temporal = false ignores dt/dxdt/dydt.
+  PoissonSystem(Grid grid, bool temporal);
+
+  const Grid& grid() const { return grid_; }
+  bool temporal() const { return temporal_; }
+  // Per-constraint weights, planar; must stay 0 where a constraint does not
+  // exist (last column for dx, last row for dy, last frame for temporal terms).
+  Field& weights(Term t) { return w_[term_index(t)]; }
+  const Field& weights(Term t) const { return w_[term_index(t)]; }
+
+  // q = A p; returns p·q (the CG step needs it, fusing saves a pass).
+  double apply(const float* p, float* q) const;
+  // b = W_primal g + Σ Hᵀ W d, with targets indexed by term (primal = g).
+  void rhs(const std::array<const Field*, kTermCount>& targets, Field* b) const;
+  // diag(A), for the Jacobi preconditioner.
+  void diagonal(Field* d) const;
+
+  // The rows of grid, split into TBB ranges of about `kChunkPixels` pixels.
+  int row_grain() const;
+
+ private:
+  Grid grid_;
+  bool temporal_;
+  std::array<Field, kTermCount> w_;
+  Field zero_row_;  // stands in for weight rows outside the grid
+};
+
+// (H_t x)(p) − d(p) for every valid constraint of term t (0 elsewhere).
+void constraint_residuals(const Grid& grid, Term t, const float* x, const Field& target,
+                          const std::vector<uint8_t>& valid, Field* r);
+
+}  // namespace gdvr

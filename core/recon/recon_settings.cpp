@@ -1,0 +1,76 @@
+#include "core/recon/recon_settings.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace gdvr {
+
+const char* recon_method_name(ReconMethod m) {
+  switch (m) {
+    case ReconMethod::kNone: return "none";
+    case ReconMethod::kL2: return "l2";
+    case ReconMethod::kL1: return "l1";
+    case ReconMethod::kUniform: return "uniform";
+    case ReconMethod::kWeighted: return "weighted";
+  }
+  return "?";
+}
+
+Expected<ReconMethod> parse_recon_method(const std::string& name) {
+  for (ReconMethod m : {ReconMethod::kNone, ReconMethod::kL2, ReconMethod::kL1, ReconMethod::kUniform,
+                        ReconMethod::kWeighted})
+    if (name == recon_method_name(m)) return m;
+  return invalid_argument("recon method: unknown '" + name + "' (expected none, l2, l1, uniform or weighted)");
+}
+
+namespace {
+Status positive_finite(double v, const char* field) {
+  if (!std::isfinite(v) || v <= 0)
+    return invalid_argument(std::string("recon settings: ") + field + " must be finite and > 0, got " +
+                            std::to_string(v));
+  return Status::Ok();
+}
+Status at_least(int v, int lo, const char* field) {
+  if (v < lo)
+    return invalid_argument(std::string("recon settings: ") + field + " must be >= " + std::to_string(lo) +
+                            ", got " + std::to_string(v));
+  return Status::Ok();
+}
+}  // namespace
+
+Status ReconSettings::validate() const {
+  GDVR_RETURN_IF_ERROR(positive_finite(alpha, "alpha"));
+  for (Term t : kAllTerms) {
+    const double w = term_weight(t);
+    if (!std::isfinite(w) || w < 0)
+      return invalid_argument(std::string("recon settings: term_weights.") + term_name(t) +
+                              " must be finite and >= 0, got " + std::to_string(w));
+  }
+  if (term_weight(Term::kPrimal) <= 0)
+    return invalid_argument("recon settings: term_weights.primal must be > 0 (the primal anchors the solve)");
+  GDVR_RETURN_IF_ERROR(at_least(l2_max_iterations, 1, "l2_max_iterations"));
+  GDVR_RETURN_IF_ERROR(positive_finite(l2_tolerance, "l2_tolerance"));
+  GDVR_RETURN_IF_ERROR(at_least(l1_outer_iterations, 1, "l1_outer_iterations"));
+  GDVR_RETURN_IF_ERROR(at_least(l1_inner_iterations, 1, "l1_inner_iterations"));
+  GDVR_RETURN_IF_ERROR(positive_finite(l1_inner_tolerance, "l1_inner_tolerance"));
+  GDVR_RETURN_IF_ERROR(positive_finite(l1_epsilon0, "l1_epsilon0"));
+  GDVR_RETURN_IF_ERROR(positive_finite(l1_epsilon_decay, "l1_epsilon_decay"));
+  if (l1_epsilon_decay > 1) return invalid_argument("recon settings: l1_epsilon_decay must be <= 1");
+  GDVR_RETURN_IF_ERROR(at_least(cv_iterations, 0, "cv_iterations"));
+  GDVR_RETURN_IF_ERROR(positive_finite(variance_floor, "variance_floor"));
+  return Status::Ok();
+}
+
+std::string ReconSettings::to_string() const {
+  std::ostringstream s;
+  s << "method=" << recon_method_name(method) << " alpha=" << alpha << " term_weights={";
+  for (Term t : kAllTerms) s << (t == Term::kPrimal ? "" : ",") << term_name(t) << ":" << term_weight(t);
+  s << "} l2_max_iterations=" << l2_max_iterations << " l2_tolerance=" << l2_tolerance
+    << " l1_outer_iterations=" << l1_outer_iterations << " l1_inner_iterations=" << l1_inner_iterations
+    << " l1_inner_tolerance=" << l1_inner_tolerance << " l1_epsilon0=" << l1_epsilon0
+    << " l1_epsilon_decay=" << l1_epsilon_decay << " cv_iterations=" << cv_iterations
+    << " variance_floor=" << variance_floor;
+  return s.str();
+}
+
+}  // namespace gdvr

@@ -1,0 +1,52 @@
+// Options of the reconstruction (REFERENCE.md §5), with the public code's
+// defaults, validated once before a solve and printable for logs.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include "core/recon/term.h"
+#include "core/util/status.h"
+
+namespace gdvr {
+
+enum class ReconMethod {
+  kNone,      // primal only (non-finite pixels replaced by 0)
+  kL2,        // screened Poisson, Jacobi-preconditioned CG
+  kL1,        // IRLS of the L1 objective
+  kUniform,   // image-space control variates, uniform weights (Rousselle 2016)
+  kWeighted,  // image-space control variates, inverse-variance weights
+};
+
+const char* recon_method_name(ReconMethod m);
+Expected<ReconMethod> parse_recon_method(const std::string& name);
+
+struct ReconSettings {
+  ReconMethod method = ReconMethod::kL2;
+  // Primal weight α of ‖α(Ī − I_g)‖; 0.2 in the G-PT and T-GPT releases.
+  double alpha = 0.2;
+  // Extra multiplier per term (primal, dx, dy, dt, dxdt, dydt); 0 drops a term.
+  std::array<double, kTermCount> term_weights = {1, 1, 1, 1, 1, 1};
+
+  // ---- L2 (and the inner solves of L1) ----
+  int l2_max_iterations = 200;
+  double l2_tolerance = 1e-4;  // relative residual ‖b − Ax‖ / ‖b‖
+
+  // ---- L1 by IRLS: weights 1/(|r| + ε_k), ε_k = ε_0 · decay^(k−1) ----
+  int l1_outer_iterations = 20;
+  int l1_inner_iterations = 50;
+  double l1_inner_tolerance = 1e-3;
+  double l1_epsilon0 = 0.05;
+  double l1_epsilon_decay = 0.5;
+
+  // ---- Control variates (uniform / weighted) ----
+  int cv_iterations = 50;
+  // Variances below this are clamped so inverse-variance weights stay finite.
+  double variance_floor = 1e-8;
+
+  double term_weight(Term t) const { return term_weights[term_index(t)]; }
+  Status validate() const;  // names the offending field
+  std::string to_string() const;
+};
+
+}  // namespace gdvr

@@ -1,0 +1,19 @@
+// Reconstruction entry point: a pure function from a window of sampled
+// buffers to images (STYLE.md: the reconstructor knows nothing of the renderer).
+#pragma once
+
+#include "core/recon/gradient_window.h"
+#include "core/recon/recon_result.h"
+#include "core/recon/recon_settings.h"
+
+namespace gdvr {
+
+// Solves the objective of REFERENCE.md §5 over all frames of the window with
+// settings.method. Invalid settings or buffers give kInvalidArgument; NaN/Inf
+// samples are dropped (counted in stats), never propagated to the output.
+Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings);
+
+// One frame, spatial terms only (W = 1).
+Expected<ReconResult> reconstruct_frame(const GradientFrame& frame, const ReconSettings& settings);
+
+}  // namespace gdvr

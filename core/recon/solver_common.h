@@ -1,0 +1,29 @@
+// Internal glue shared by the solvers in core/recon (not a public API).
+#pragma once
+
+#include "core/recon/constraint_layout.h"
+#include "core/recon/recon_result.h"
+#include "core/recon/recon_settings.h"
+
+namespace gdvr {
+
+// Per-method solvers; `result->frames` arrive allocated (zeros) and shaped.
+Status solve_screened_poisson_l2(const GradientWindow& window, const ConstraintLayout& layout,
+                                 const ReconSettings& settings, ReconResult* result);
+Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layout, const ReconSettings& settings,
+                     ReconResult* result);
+Status solve_control_variates(const GradientWindow& window, const ConstraintLayout& layout,
+                              const ReconSettings& settings, ReconResult* result);
+
+// Copies planar channel c into the result images.
+void scatter_channel(const Grid& grid, const Field& x, int c, ReconResult* result);
+
+// A dropped primal still gets this fraction of the primal weight (target 0),
+// so a pixel whose constraints are all dropped stays determined and finite.
+constexpr float kDroppedPrimalWeight = 1e-6f;
+
+// 1 / d, and 0 where the row of A is empty (d = 0), which leaves that unknown at
+// its warm start instead of producing Inf.
+void invert_diagonal(Field* d);
+
+}  // namespace gdvr

@@ -1,0 +1,106 @@
+// Synthetic windows with known answers for the reconstruction tests: a smooth
+// field plus a moving hard edge, with exact finite-difference gradients
+// (REFERENCE.md §5 conventions), optionally a noisy primal.
+#pragma once
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include "core/recon/gradient_window.h"
+
+namespace gdvr::test {
+
+inline float scene_value(int x, int y, int t, int c) {
+  const float smooth = 0.5f + 0.3f * std::sin(0.21f * x + 0.13f * t + c) * std::cos(0.17f * y - 0.05f * t);
+  const float edge = (x + 0.5f * y > 20.0f + 2.0f * t) ? 0.6f : 0.0f;
+  return (smooth + edge) * (1.0f + 0.2f * c);
+}
+
+inline Image exact_frame(int w, int h, int t, int channels = 3) {
+  Image img(w, h, channels);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < channels; ++c) img.at(x, y, c) = scene_value(x, y, t, c);
+  return img;
+}
+
+struct SceneOptions {
+  int width = 40, height = 32, frames = 1, channels = 3;
+  bool temporal = false;      // fill dt, dxdt, dydt
+  float primal_sigma = 0.0f;  // Gaussian noise on the primal
+  float gradient_sigma = 0.0f;
+  bool variances = false;     // fill variance buffers with the true noise variances
+  unsigned seed = 1;
+};
+
+// Frame t's buffers; the temporal buffers of the last frame are filled from
+// frame t+1 of the scene anyway: the window must ignore them.
+inline GradientWindow make_window(const SceneOptions& o) {
+  std::mt19937 rng(o.seed);
+  std::normal_distribution<float> gauss(0.0f, 1.0f);
+  GradientWindow win;
+  for (int t = 0; t < o.frames; ++t) {
+    auto f = std::make_shared<GradientFrame>();
+    const Image cur = exact_frame(o.width, o.height, t, o.channels);
+    const Image next = exact_frame(o.width, o.height, t + 1, o.channels);
+    for (Term term : kAllTerms) {
+      if (is_temporal(term) && !o.temporal) continue;
+      Image& b = f->buffer(term);
+      b = Image(o.width, o.height, o.channels);
+      const float sigma = term == Term::kPrimal ? o.primal_sigma : o.gradient_sigma;
+      for (int y = 0; y < o.height; ++y)
+        for (int x = 0; x < o.width; ++x)
+          for (int c = 0; c < o.channels; ++c) {
+            const int xr = std::min(x + 1, o.width - 1), yd = std::min(y + 1, o.height - 1);
+            const auto dx = [&](const Image& I) { return I.at(xr, y, c) - I.at(x, y, c); };
+            const auto dy = [&](const Image& I) { return I.at(x, yd, c) - I.at(x, y, c); };
+            float v = 0;
+            switch (term) {
+              case Term::kPrimal: v = cur.at(x, y, c); break;
+              case Term::kDx: v = dx(cur); break;
+              case Term::kDy: v = dy(cur); break;
+              case Term::kDt: v = next.at(x, y, c) - cur.at(x, y, c); break;
+              case Term::kDxdt: v = dx(next) - dx(cur); break;
+              case Term::kDydt: v = dy(next) - dy(cur); break;
+            }
+            b.at(x, y, c) = v + sigma * gauss(rng);
+          }
+      if (o.variances) {
+        Image& var = f->variance(term);
+        var = Image(o.width, o.height, o.channels);
+        for (float& v : var.data()) v = sigma * sigma;
+      }
+    }
+    win.frames.push_back(std::move(f));
+  }
+  return win;
+}
+
+// Root-mean-square and max error of `got` against the exact scene frame t.
+struct ErrorStats {
+  double rms = 0, max = 0;
+};
+inline ErrorStats frame_error(const Image& got, int t) {
+  const Image ref = exact_frame(got.width(), got.height(), t, got.channels());
+  ErrorStats e;
+  for (size_t i = 0; i < ref.data().size(); ++i) {
+    const double d = double(got.data()[i]) - ref.data()[i];
+    e.rms += d * d;
+    e.max = std::max(e.max, std::fabs(d));
+  }
+  e.rms = std::sqrt(e.rms / ref.data().size());
+  return e;
+}
+
+inline bool all_finite(const Image& img) {
+  for (float v : img.data())
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+inline GradientFrame& mutable_frame(GradientWindow& w, int t) {
+  return const_cast<GradientFrame&>(*w.frames[t]);
+}
+
+}  // namespace gdvr::test
