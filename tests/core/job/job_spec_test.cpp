@@ -1,0 +1,140 @@
+#include "core/job/job_spec.h"
+
+#include <gtest/gtest.h>
+
+namespace gdvr {
+namespace {
+
+std::vector<int> frames(const std::string& text, size_t max = 0) {
+  auto r = parse_frame_range(text, max);
+  EXPECT_TRUE(r.ok()) << text << ": " << r.status().to_string();
+  return r.ok() ? r.value() : std::vector<int>{};
+}
+
+TEST(FrameRangeTest, Forms) {
+  EXPECT_EQ(frames("7"), (std::vector<int>{7}));
+  EXPECT_EQ(frames("1-5"), (std::vector<int>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(frames("1-10x3"), (std::vector<int>{1, 4, 7, 10}));
+  EXPECT_EQ(frames("1,5,10-12"), (std::vector<int>{1, 5, 10, 11, 12}));
+  EXPECT_EQ(frames(" 3 - 4 , 1 ,4 "), (std::vector<int>{1, 3, 4}));
+  EXPECT_EQ(frames("0"), (std::vector<int>{0}));
+  EXPECT_EQ(frames("1-100").size(), 100u);
+  EXPECT_EQ(frames("1-100x2").size(), 50u);
+}
+
+TEST(FrameRangeTest, Errors) {
+  for (const char* bad : {"5-1", "x", "1-", "-3", "1-10x-2", "1-10x0", "", "1,,2", "a-b", "1.5", "3x2"}) {
+    auto r = parse_frame_range(bad);
+    EXPECT_FALSE(r.ok()) << "'" << bad << "' accepted";
+  }
+  auto r = parse_frame_range("1,5-1");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("5-1"), std::string::npos);
+}
+
+TEST(FrameRangeTest, TooManyFrames) {
+  auto r = parse_frame_range("1-1000", 100);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kResourceExhausted);
+  EXPECT_FALSE(parse_frame_range("0-999999999").ok());
+  EXPECT_TRUE(parse_frame_range("1-100", 100).ok());
+}
+
+TEST(JobSpecTest, ParsesEveryField) {
+  auto job = parse_job_json(R"({
+    "scene": "cbox/cbox-rgb.xml", "frames": "1-10x2", "fps": 30, "width": 320, "height": 240, "spp": 16,
+    "time_budget_s": 2.5, "seed": "18446744073709551615", "integrator": "gpt", "shift": "hybrid",
+    "reconstruction": {"method": "l2", "alpha": 0.5, "window": 5},
+    "params": {"spp": "8", "res": 64},
+    "tracks": [{"target": "sensor", "interpolation": "cubic", "keys": [
+      {"frame": 0, "lookat": {"origin": [0, 0, -5], "target": [0, 0, 0], "up": [0, 1, 0]}},
+      {"time": 1, "translate": [1, 2, 3], "rotate": {"axis": [0, 0, 1], "angle": 90}, "scale": [2, 2, 2]},
+      {"frame": 60, "matrix": [1,0,0,5, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]}],
+    "outputs": {"exr_layers": ["primal", "dx"], "previews": false, "video_codec": "ffv1",
+                "ocio_display": "d", "ocio_view": "v"},
+    "priority": 3, "reference": "ref_%04d.exr"})",
+                            "job.json");
+  ASSERT_TRUE(job.ok()) << job.status().to_string();
+  EXPECT_EQ(job->scene, "cbox/cbox-rgb.xml");
+  EXPECT_EQ(job->seed, 18446744073709551615ull);
+  EXPECT_EQ(job->integrator, "gpt");
+  EXPECT_EQ(job->reconstruction.window, 5);
+  EXPECT_EQ(job->params.at("res"), "64");
+  ASSERT_EQ(job->animation.tracks.size(), 1u);
+  const Track& t = job->animation.tracks[0];
+  EXPECT_EQ(t.interpolation, Interpolation::kCubic);
+  ASSERT_EQ(t.keys.size(), 3u);
+  EXPECT_DOUBLE_EQ(t.keys[2].time, 2.0);  // frame 60 at 30 fps
+  // translate * rotate * scale: (1,0,0) -> (2,0,0) -> (0,2,0) -> (1,4,3).
+  Vec3f p = t.keys[1].to_world.point(Vec3f(1, 0, 0));
+  EXPECT_NEAR(p.x, 1.0f, 1e-5f);
+  EXPECT_NEAR(p.y, 4.0f, 1e-5f);
+  EXPECT_NEAR(p.z, 3.0f, 1e-5f);
+  EXPECT_FALSE(job->outputs.previews);
+  EXPECT_EQ(job->outputs.exr_layers.size(), 2u);
+  EXPECT_EQ(job->priority, 3);
+}
+
+TEST(JobSpecTest, RoundTrip) {
+  auto job = parse_job_json(R"({"scene": "a.xml", "seed": 42, "frames": "0-3",
+    "animation": {"tracks": [{"target": "box", "interpolation": "step",
+      "keys": [{"time": 0, "translate": [1, 0, 0]}, {"time": 0.5, "rotate": {"axis": [1, 0, 0], "angle": 10}}]}]}})",
+                            "job");
+  ASSERT_TRUE(job.ok()) << job.status().to_string();
+  std::string text = job_to_json(*job);
+  auto again = parse_job_json(text, "again");
+  ASSERT_TRUE(again.ok()) << again.status().to_string() << "\n" << text;
+  EXPECT_EQ(job_to_json(*again), text);
+  EXPECT_EQ(again->seed, 42u);
+  ASSERT_EQ(again->animation.tracks.size(), 1u);
+  EXPECT_EQ(again->animation.tracks[0].keys[1].to_world, job->animation.tracks[0].keys[1].to_world);
+  EXPECT_EQ(again->animation.tracks[0].interpolation, Interpolation::kStep);
+}
+
+TEST(JobSpecTest, UnknownFieldsNameTheirPath) {
+  struct Case {
+    const char* json;
+    const char* path;
+  } cases[] = {
+      {R"({"scene": "a.xml", "sceen": 1})", "job.sceen: unknown field"},
+      {R"({"scene": "a.xml", "reconstruction": {"alpah": 1}})", "job.reconstruction.alpah: unknown field"},
+      {R"({"scene": "a.xml", "outputs": {"png": true}})", "job.outputs.png: unknown field"},
+      {R"({"scene": "a.xml", "tracks": [{"target": "sensor", "keys": [{"time": 0, "matrx": []}]}]})",
+       "job.tracks[0].keys[0].matrx: unknown field"},
+  };
+  for (const Case& c : cases) {
+    auto job = parse_job_json(c.json, "j.json");
+    ASSERT_FALSE(job.ok()) << c.json;
+    EXPECT_EQ(job.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(job.status().message().find(c.path), std::string::npos) << job.status().message();
+  }
+}
+
+TEST(JobSpecTest, TypeAndValueErrorsNameTheField) {
+  struct Case {
+    const char* json;
+    const char* needle;
+  } cases[] = {
+      {R"({"scene": "a.xml", "width": "wide"})", "job.width"},
+      {R"({"scene": "a.xml", "fps": -1})", "job.fps"},
+      {R"({"scene": "a.xml", "seed": "-1"})", "job.seed"},
+      {R"({"scene": "a.xml", "frames": "5-1"})", "job.frames"},
+      {R"({"scene": "a.xml", "integrator": "bdpt"})", "job.integrator"},
+      {R"({"scene": "a.xml", "tracks": [{"target": "s", "interpolation": "spline", "keys": [{"time": 0, "translate": [0,0,0]}]}]})",
+       "job.tracks[0].interpolation"},
+      {R"({"scene": "a.xml", "tracks": [{"target": "s", "keys": [{"time": 1, "translate": [0,0,0]}, {"time": 0, "translate": [0,0,0]}]}]})",
+       "job.tracks[0].keys[1]"},
+      {R"({"scene": "a.xml", "tracks": [{"target": "s", "keys": [{"time": 0, "matrix": [1, 2]}]}]})", "matrix"},
+      {R"({"frames": "1"})", "job.scene"},
+      {R"([1, 2])", "job"},
+      {R"({"scene": )", "not valid JSON"},
+  };
+  for (const Case& c : cases) {
+    auto job = parse_job_json(c.json, "j.json");
+    ASSERT_FALSE(job.ok()) << c.json;
+    EXPECT_NE(job.status().message().find(c.needle), std::string::npos) << job.status().message();
+  }
+}
+
+}  // namespace
+}  // namespace gdvr
