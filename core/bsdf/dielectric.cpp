@@ -113,8 +113,12 @@ bool rough_dielectric_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Ve
     dwh_dwi = sqr(s->eta) * dot(s->wi, m) / sqr(dot(wo, m) + s->eta * dot(s->wi, m));
     if (s->wi.z * cos_o >= 0.0f) return false;
   }
-  float g_weight = distr.sample_visible ? distr.smith_g1(s->wi, m)
-                                        : distr.g(wo, s->wi, m) * dot(wo, m) / (cos_o * m.z);
+  // Visible normals: f |cos| / pdf reduces to G1(wi). Otherwise D G |wo.m| / (|cos_o| pdf_m).
+  // Mitsuba 3 writes the latter as G (wo.m) / (cos_o cos_m), which drops D / pdf_m and is
+  // only right without Walter's widened sampling lobe; we keep weight = eval / pdf.
+  float g_weight = distr.sample_visible
+                       ? distr.smith_g1(s->wi, m)
+                       : distr.g(wo, s->wi, m) * distr.eval(m) * std::abs(dot(wo, m)) / (std::abs(cos_o) * pdf_m);
   s->weight = weight * g_weight;
   s->pdf = pdf * std::abs(dwh_dwi);
   return s->pdf > 0.0f && std::isfinite(s->pdf) && g_weight > 0.0f;
