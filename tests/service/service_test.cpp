@@ -1,0 +1,401 @@
+// Integration tests: the real gdvr-server process on an ephemeral localhost
+// port, driven over gRPC. Renders are tiny (cbox at 32x32, a few spp) so the
+// suite stays fast on two cores.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <thread>
+
+#include "core/io/image_io.h"
+#include "core/job/job_runner.h"
+#include "core/job/job_spec.h"
+#include "tests/service/server_process.h"
+
+namespace gdvr::testing {
+namespace {
+namespace fs = std::filesystem;
+using grpc::StatusCode;
+
+const char* kSmallJob = R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-3", "width": 32, "height": 32, "spp": 2, "seed": 7})";
+// Slow enough per frame to kill or cancel mid-job on two cores.
+const char* kSlowJob = R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-8", "width": 96, "height": 96, "spp": 48, "seed": 11})";
+
+grpc::Status submit(v1::RenderService::Stub* stub, const std::string& key, const std::string& json,
+                    v1::SubmitJobResponse* resp, const std::string& token = "") {
+  grpc::ClientContext ctx;
+  if (!token.empty()) ctx.AddMetadata("authorization", "Bearer " + token);
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  v1::SubmitJobRequest req;
+  req.set_idempotency_key(key);
+  req.set_job_json(json);
+  return stub->SubmitJob(&ctx, req, resp);
+}
+
+struct Watched {
+  std::map<int, std::string> exr;  // frame -> file bytes
+  std::vector<int> order;
+  std::map<int, std::vector<float>> raw;
+  std::string terminal;  // completed | failed | cancelled | "" (stopped early)
+  std::string reason;
+  grpc::Status status;
+};
+
+// Watches from `from` (-1: start); stops after `stop_after` frames when > 0.
+Watched watch(v1::RenderService::Stub* stub, const std::string& id, int from = -1, int stop_after = 0,
+              bool raw = false) {
+  Watched w;
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(240));
+  v1::WatchJobRequest req;
+  req.set_job_id(id);
+  req.set_include_raw_rgb(raw);
+  if (from >= 0) req.set_from_frame(from);
+  auto reader = stub->WatchJob(&ctx, req);
+  v1::JobEvent ev;
+  std::string exr, rawbuf;
+  while (reader->Read(&ev)) {
+    if (ev.has_frame_final()) {
+      const auto& f = ev.frame_final();
+      EXPECT_LE(f.data().size(), size_t(1) << 20);
+      if (f.payload() == v1::FrameFinal::PAYLOAD_EXR) {
+        if (f.offset() == 0) exr.clear(), rawbuf.clear();
+        EXPECT_EQ(f.offset(), exr.size());
+        exr += f.data();
+      } else {
+        rawbuf += f.data();
+      }
+      if (f.last()) {
+        EXPECT_EQ(f.stats().frame(), f.frame());
+        w.exr[f.frame()] = exr;
+        w.order.push_back(f.frame());
+        if (raw) {
+          std::vector<float> v(rawbuf.size() / 4);
+          std::memcpy(v.data(), rawbuf.data(), v.size() * 4);
+          w.raw[f.frame()] = v;
+        }
+        if (stop_after > 0 && int(w.order.size()) >= stop_after) {
+          ctx.TryCancel();  // a client dropping mid-stream
+          break;
+        }
+      }
+    } else if (ev.has_completed()) {
+      w.terminal = "completed";
+    } else if (ev.has_failed()) {
+      w.terminal = "failed", w.reason = ev.failed().reason();
+    } else if (ev.has_cancelled()) {
+      w.terminal = "cancelled", w.reason = ev.cancelled().reason();
+    }
+  }
+  w.status = reader->Finish();
+  return w;
+}
+
+LayeredImage decode(const std::string& exr_bytes, const std::string& tmp_path) {
+  { std::ofstream(tmp_path, std::ios::binary) << exr_bytes; }
+  auto img = read_exr(tmp_path);
+  EXPECT_TRUE(img.ok()) << img.status().to_string();
+  return img.ok() ? *img : LayeredImage{};
+}
+
+// What run_job itself produces for the job, in-process.
+std::map<int, LayeredImage> reference(const std::string& json, const TestDir& dir) {
+  auto job = parse_job_json(json, "reference");
+  EXPECT_TRUE(job.ok()) << job.status().to_string();
+  std::map<int, LayeredImage> out;
+  JobRunOptions opts;
+  opts.base_dir = dir.assets();
+  opts.asset_root = dir.assets();
+  JobCallbacks cb;
+  cb.on_frame_final = [&](const FrameOutput& f) { out[f.frame] = f.image; };
+  Status st = run_job(*job, opts, cb, nullptr);
+  EXPECT_TRUE(st.ok()) << st.to_string();
+  return out;
+}
+
+void expect_same(const LayeredImage& a, const LayeredImage& b, int frame) {
+  ASSERT_EQ(a.layers.size(), b.layers.size()) << "frame " << frame;
+  for (const auto& la : a.layers) {
+    const ImageLayer* lb = b.find(la.name);
+    ASSERT_NE(lb, nullptr) << "frame " << frame << " layer '" << la.name << "'";
+    EXPECT_EQ(la.image.data(), lb->image.data()) << "frame " << frame << " layer '" << la.name << "' differs";
+  }
+}
+
+v1::Job get_job(v1::RenderService::Stub* stub, const std::string& id) {
+  grpc::ClientContext ctx;
+  v1::GetJobRequest req;
+  req.set_job_id(id);
+  v1::Job job;
+  EXPECT_TRUE(stub->GetJob(&ctx, req, &job).ok());
+  return job;
+}
+
+class ServiceTest : public ::testing::Test {
+ protected:
+  void SetUp() override { ASSERT_TRUE(server_.start()) << "server did not start; log: " << server_.log_path(); }
+  TestDir dir_;
+  ServerProcess server_{dir_};
+};
+
+// ---- Submit, stream, compare ----
+
+TEST_F(ServiceTest, StreamedFramesEqualRunJob) {
+  auto stub = server_.stub();
+  v1::SubmitJobResponse resp;
+  ASSERT_TRUE(submit(stub.get(), "k1", kSmallJob, &resp).ok());
+  Watched w = watch(stub.get(), resp.job_id(), -1, 0, /* raw = */ true);
+  ASSERT_TRUE(w.status.ok()) << w.status.error_message();
+  EXPECT_EQ(w.terminal, "completed");
+  EXPECT_EQ(w.order, (std::vector<int>{1, 2, 3}));
+  auto ref = reference(kSmallJob, dir_);
+  for (int f : {1, 2, 3}) {
+    LayeredImage got = decode(w.exr[f], dir_.path() + "/got.exr");
+    expect_same(got, ref[f], f);
+    // The streamed file is byte-identical to the one on the server's disk.
+    std::ifstream in(dir_.out() + "/" + resp.job_id() + "/frame_000" + std::to_string(f) + ".exr", std::ios::binary);
+    std::string disk((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_EQ(disk, w.exr[f]);
+    const ImageLayer* main = ref[f].find("");
+    ASSERT_NE(main, nullptr);
+    ASSERT_EQ(w.raw[f].size(), main->image.pixel_count() * 3);
+    EXPECT_EQ(w.raw[f][0], main->image.at(0, 0, 0));
+  }
+  EXPECT_TRUE(fs::exists(dir_.out() + "/" + resp.job_id() + "/stats.json"));
+  EXPECT_EQ(get_job(stub.get(), resp.job_id()).state(), v1::JOB_STATE_COMPLETED);
+}
+
+TEST_F(ServiceTest, IdempotentSubmit) {
+  auto stub = server_.stub();
+  v1::SubmitJobResponse a, b, c;
+  ASSERT_TRUE(submit(stub.get(), "same-key", kSmallJob, &a).ok());
+  ASSERT_TRUE(submit(stub.get(), "same-key", kSmallJob, &b).ok());
+  EXPECT_EQ(a.job_id(), b.job_id());
+  EXPECT_FALSE(a.existing());
+  EXPECT_TRUE(b.existing());
+  grpc::Status st = submit(stub.get(), "same-key", kSlowJob, &c);
+  EXPECT_EQ(st.error_code(), StatusCode::FAILED_PRECONDITION);
+  EXPECT_NE(st.error_message().find("idempotency_key"), std::string::npos);
+  grpc::ClientContext ctx;
+  v1::ListJobsRequest lr;
+  v1::ListJobsResponse list;
+  ASSERT_TRUE(stub->ListJobs(&ctx, lr, &list).ok());
+  EXPECT_EQ(list.jobs_size(), 1);
+}
+
+TEST_F(ServiceTest, CancelStopsRunningJob) {
+  auto stub = server_.stub();
+  v1::SubmitJobResponse resp;
+  ASSERT_TRUE(submit(stub.get(), "c", kSlowJob, &resp).ok());
+  Watched first = watch(stub.get(), resp.job_id(), -1, /* stop_after = */ 1);
+  ASSERT_EQ(first.order.size(), 1u);
+  grpc::ClientContext ctx;
+  v1::CancelJobRequest req;
+  req.set_job_id(resp.job_id());
+  v1::Job job;
+  ASSERT_TRUE(stub->CancelJob(&ctx, req, &job).ok());
+  Watched rest = watch(stub.get(), resp.job_id());
+  EXPECT_EQ(rest.terminal, "cancelled");
+  EXPECT_LT(rest.order.size(), 8u);
+  EXPECT_EQ(get_job(stub.get(), resp.job_id()).state(), v1::JOB_STATE_CANCELLED);
+  // Cancelling again is a precondition failure, not a crash.
+  grpc::ClientContext ctx2;
+  EXPECT_EQ(stub->CancelJob(&ctx2, req, &job).error_code(), StatusCode::FAILED_PRECONDITION);
+}
+
+TEST_F(ServiceTest, WatchResumesAfterDisconnect) {
+  auto stub = server_.stub();
+  v1::SubmitJobResponse resp;
+  ASSERT_TRUE(submit(stub.get(), "r", kSlowJob, &resp).ok());
+  Watched a = watch(stub.get(), resp.job_id(), -1, /* stop_after = */ 2);
+  ASSERT_EQ(a.order, (std::vector<int>{1, 2}));
+  Watched b = watch(stub.get(), resp.job_id(), a.order.back() + 1);
+  EXPECT_EQ(b.terminal, "completed");
+  EXPECT_EQ(b.order, (std::vector<int>{3, 4, 5, 6, 7, 8}));  // nothing missed, nothing repeated
+  // The dropped watcher did not cancel the job.
+  EXPECT_EQ(get_job(stub.get(), resp.job_id()).state(), v1::JOB_STATE_COMPLETED);
+}
+
+TEST_F(ServiceTest, KillNineAndRestartResumes) {
+  std::string id;
+  {
+    auto stub = server_.stub();
+    v1::SubmitJobResponse resp;
+    ASSERT_TRUE(submit(stub.get(), "kill", kSlowJob, &resp).ok());
+    id = resp.job_id();
+    Watched a = watch(stub.get(), id, -1, /* stop_after = */ 2);
+    ASSERT_EQ(a.order.size(), 2u);
+  }
+  server_.kill9();
+  ASSERT_TRUE(server_.start());
+  auto stub = server_.stub();
+  Watched w = watch(stub.get(), id);
+  ASSERT_TRUE(w.status.ok()) << w.status.error_message();
+  EXPECT_EQ(w.terminal, "completed");
+  EXPECT_EQ(w.order, (std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8}));
+  v1::Job job = get_job(stub.get(), id);
+  EXPECT_EQ(job.final_frames_size(), 8);
+  auto ref = reference(kSlowJob, dir_);
+  for (int f = 1; f <= 8; ++f) expect_same(decode(w.exr[f], dir_.path() + "/got.exr"), ref[f], f);
+  // No stray temporary files left by the crash.
+  for (const auto& e : fs::directory_iterator(dir_.out() + "/" + id))
+    EXPECT_TRUE(e.path().extension() == ".exr" || e.path().filename() == "stats.json") << e.path();
+}
+
+TEST_F(ServiceTest, SigtermShutsDownGracefully) {
+  auto stub = server_.stub();
+  v1::SubmitJobResponse resp;
+  ASSERT_TRUE(submit(stub.get(), "t", kSlowJob, &resp).ok());
+  (void)watch(stub.get(), resp.job_id(), -1, 1);
+  EXPECT_EQ(server_.terminate(), 0);
+  ASSERT_TRUE(server_.start());  // the job was checkpointed and resumes
+  Watched w = watch(server_.stub().get(), resp.job_id());
+  EXPECT_EQ(w.terminal, "completed");
+  EXPECT_EQ(w.order.size(), 8u);
+}
+
+// ---- Bad input ----
+
+struct BadCase {
+  const char* name;
+  std::string json;
+  StatusCode code;
+  const char* must_mention;
+};
+
+TEST_F(ServiceTest, BadInputsGetTheRightStatus) {
+  { std::ofstream(dir_.assets() + "/broken.xml") << "<scene version=\"3.0.0\"><shape type="; }
+  { std::ofstream(dir_.path() + "/outside.xml") << "<scene version=\"3.0.0\"/>"; }
+  std::vector<BadCase> cases = {
+      {"bad frame range", R"({"scene": "cbox/cbox-rgb.xml", "frames": "5-1"})", StatusCode::INVALID_ARGUMENT, "frames"},
+      {"garbage frame range", R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-x"})", StatusCode::INVALID_ARGUMENT, "frames"},
+      {"unknown field", R"({"scene": "cbox/cbox-rgb.xml", "colour": 3})", StatusCode::INVALID_ARGUMENT, "colour"},
+      {"nested unknown field", R"({"scene": "cbox/cbox-rgb.xml", "outputs": {"codec": "h264"}})",
+       StatusCode::INVALID_ARGUMENT, "outputs.codec"},
+      {"missing scene", R"({"scene": "cbox/nope.xml"})", StatusCode::NOT_FOUND, "nope.xml"},
+      {"outside asset root", R"({"scene": "../outside.xml"})", StatusCode::INVALID_ARGUMENT, "asset root"},
+      {"absolute outside", R"({"scene": "/etc/passwd"})", StatusCode::INVALID_ARGUMENT, "asset root"},
+      {"absurd resolution", R"({"scene": "cbox/cbox-rgb.xml", "width": 100000, "height": 100000})",
+       StatusCode::RESOURCE_EXHAUSTED, "width"},
+      {"negative spp", R"({"scene": "cbox/cbox-rgb.xml", "spp": -4})", StatusCode::INVALID_ARGUMENT, "spp"},
+      {"malformed xml", R"({"scene": "broken.xml"})", StatusCode::INVALID_ARGUMENT, "broken.xml"},
+      {"not json", "{scene:", StatusCode::INVALID_ARGUMENT, "JSON"},
+      {"no scene", "{}", StatusCode::INVALID_ARGUMENT, "scene"},
+      {"unknown integrator", R"({"scene": "cbox/cbox-rgb.xml", "integrator": "magic"})", StatusCode::INVALID_ARGUMENT,
+       "integrator"},
+  };
+  auto stub = server_.stub();
+  for (const auto& c : cases) {
+    v1::SubmitJobResponse resp;
+    grpc::Status st = submit(stub.get(), std::string("bad-") + c.name, c.json, &resp);
+    EXPECT_EQ(st.error_code(), c.code) << c.name << ": " << st.error_message();
+    EXPECT_NE(st.error_message().find(c.must_mention), std::string::npos)
+        << c.name << ": message '" << st.error_message() << "' does not mention '" << c.must_mention << "'";
+  }
+  grpc::ClientContext ctx;
+  v1::GetJobRequest req;
+  req.set_job_id("job-unknown");
+  v1::Job job;
+  EXPECT_EQ(stub->GetJob(&ctx, req, &job).error_code(), StatusCode::NOT_FOUND);
+  grpc::ClientContext wctx;
+  v1::WatchJobRequest wreq;
+  wreq.set_job_id("job-unknown");
+  auto reader = stub->WatchJob(&wctx, wreq);
+  v1::JobEvent ev;
+  EXPECT_FALSE(reader->Read(&ev));
+  EXPECT_EQ(reader->Finish().error_code(), StatusCode::NOT_FOUND);
+  grpc::ClientContext lctx;
+  v1::ListJobsRequest lreq;
+  lreq.set_page_token("garbage");
+  v1::ListJobsResponse lresp;
+  EXPECT_EQ(stub->ListJobs(&lctx, lreq, &lresp).error_code(), StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(health_status(server_.channel()), "SERVING");
+}
+
+TEST(ServiceLimits, OversizedUploadAndQueueLimit) {
+  TestDir dir;
+  ServerProcess server(dir, {"--max-upload-bytes=1000", "--max-queue=1", "--concurrency=1"});
+  ASSERT_TRUE(server.start());
+  auto stub = server.stub();
+  {
+    grpc::ClientContext ctx;
+    v1::UploadSceneResponse resp;
+    auto writer = stub->UploadScene(&ctx, &resp);
+    v1::UploadSceneChunk chunk;
+    chunk.set_scene_file("scene.xml");
+    chunk.set_path("scene.xml");
+    chunk.set_data(std::string(4000, 'x'));
+    writer->Write(chunk);
+    writer->WritesDone();
+    grpc::Status st = writer->Finish();
+    EXPECT_EQ(st.error_code(), StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
+    EXPECT_NE(st.error_message().find("upload"), std::string::npos);
+  }
+  {
+    grpc::ClientContext ctx;
+    v1::UploadSceneResponse resp;
+    auto writer = stub->UploadScene(&ctx, &resp);
+    v1::UploadSceneChunk chunk;
+    chunk.set_scene_file("a.xml");
+    chunk.set_path("../a.xml");
+    chunk.set_data("<scene/>");
+    writer->Write(chunk);
+    writer->WritesDone();
+    EXPECT_EQ(writer->Finish().error_code(), StatusCode::INVALID_ARGUMENT);
+  }
+  {  // A good upload is content-addressed under uploads/ and usable by a job.
+    std::ifstream in(dir.assets() + "/cbox/cbox-rgb.xml");
+    std::string xml((std::istreambuf_iterator<char>(in)), {});
+    (void)xml;
+  }
+  // Queue limit: one running + one queued fit; the third is refused.
+  v1::SubmitJobResponse r;
+  ASSERT_TRUE(submit(stub.get(), "q1", kSlowJob, &r).ok());
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let it start
+  grpc::Status st2 = submit(stub.get(), "q2", kSlowJob, &r);
+  grpc::Status st3 = submit(stub.get(), "q3", kSlowJob, &r);
+  EXPECT_TRUE(st2.ok() || st2.error_code() == StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_EQ(st3.error_code(), StatusCode::RESOURCE_EXHAUSTED) << st3.error_message();
+  EXPECT_NE(st3.error_message().find("queue"), std::string::npos);
+  EXPECT_EQ(health_status(server.channel()), "SERVING");
+}
+
+// ---- Auth ----
+
+TEST(ServiceAuth, MissingOrWrongTokenIsUnauthenticated) {
+  TestDir dir;
+  ServerProcess server(dir, {}, {{"GDVR_TOKENS", "s3cret,other"}});
+  ASSERT_TRUE(server.start());
+  auto stub = server.stub();
+  v1::SubmitJobResponse resp;
+  grpc::Status none = submit(stub.get(), "a1", kSmallJob, &resp);
+  EXPECT_EQ(none.error_code(), StatusCode::UNAUTHENTICATED) << none.error_message();
+  grpc::Status wrong = submit(stub.get(), "a2", kSmallJob, &resp, "guess");
+  EXPECT_EQ(wrong.error_code(), StatusCode::UNAUTHENTICATED);
+  grpc::Status right = submit(stub.get(), "a3", kSmallJob, &resp, "s3cret");
+  EXPECT_TRUE(right.ok()) << right.error_message();
+  {
+    grpc::ClientContext ctx;
+    v1::WatchJobRequest req;
+    req.set_job_id(resp.job_id());
+    auto reader = stub->WatchJob(&ctx, req);
+    v1::JobEvent ev;
+    EXPECT_FALSE(reader->Read(&ev));
+    EXPECT_EQ(reader->Finish().error_code(), StatusCode::UNAUTHENTICATED);
+  }
+  // Rejected calls did no work: only the authenticated job exists.
+  grpc::ClientContext ctx;
+  ctx.AddMetadata("authorization", "Bearer other");
+  v1::ListJobsRequest lr;
+  v1::ListJobsResponse list;
+  ASSERT_TRUE(stub->ListJobs(&ctx, lr, &list).ok());
+  EXPECT_EQ(list.jobs_size(), 1);
+  EXPECT_EQ(health_status(server.channel()), "SERVING");  // probes need no token
+}
+
+}  // namespace
+}  // namespace gdvr::testing
