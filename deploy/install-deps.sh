@@ -14,8 +14,8 @@ PACKAGES=(
   # scene formats
   libpugixml-dev zlib1g-dev libtinygltf-dev nlohmann-json3-dev
   # service
-  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev
-  python3-grpcio python3-numpy
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev
+  python3-grpcio python3-protobuf python3-numpy python3-setuptools
   # tests
   libgtest-dev libgmock-dev
 )
