@@ -179,9 +179,10 @@ Status parse_keyframe(const JsonReader& r, const json& j, const std::string& pat
       GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"axis", "angle"}));
       std::vector<double> axis;
       double angle = 0;
-      if (!rj.contains("axis") || !rj.contains("angle")) return r.error(rp, "needs 'axis' and 'angle' (degrees)");
+      // Protobuf JSON omits a zero angle, so only the axis is required.
+      if (!rj.contains("axis")) return r.error(rp, "needs 'axis' (and 'angle' in degrees)");
       GDVR_RETURN_IF_ERROR(r.get_vec(rj["axis"], rp + ".axis", 3, &axis));
-      GDVR_RETURN_IF_ERROR(r.get(rj["angle"], rp + ".angle", &angle));
+      GDVR_RETURN_IF_ERROR(r.opt(rj, "angle", rp, &angle));
       if (axis[0] == 0 && axis[1] == 0 && axis[2] == 0) return r.error(rp + ".axis", "must be non-zero");
       t = Transform::rotate(to_vec3f(axis), float(angle)) * t;
     }

@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
+#include "core/scene/mitsuba_loader.h"
+
 namespace gdvr {
 namespace {
 
@@ -134,6 +139,30 @@ TEST(JobSpecTest, TypeAndValueErrorsNameTheField) {
     ASSERT_FALSE(job.ok()) << c.json;
     EXPECT_NE(job.status().message().find(c.needle), std::string::npos) << job.status().message();
   }
+}
+
+}  // namespace
+}  // namespace gdvr
+
+namespace gdvr {
+namespace {
+
+// The bundled demo job must parse and its tracks must address the demo scene.
+TEST(JobSpecTest, DemoJobMatchesDemoScene) {
+  std::string dir = std::string(GDVR_SOURCE_DIR) + "/scenes/demo/";
+  std::ifstream in(dir + "demo_job.json");
+  if (!in) GTEST_SKIP() << "no demo job";
+  std::stringstream ss;
+  ss << in.rdbuf();
+  auto job = parse_job_json(ss.str(), "demo_job.json");
+  ASSERT_TRUE(job.ok()) << job.status().to_string();
+  auto scene = load_mitsuba_scene(dir + job->scene, {});
+  ASSERT_TRUE(scene.ok()) << scene.status().to_string();
+  ASSERT_TRUE(validate_animation(job->animation, *scene).ok());
+  auto frames = parse_frame_range(job->frames);
+  ASSERT_TRUE(frames.ok());
+  for (int f : {frames->front(), frames->back()})
+    ASSERT_TRUE(apply_animation(job->animation, f / job->fps, &*scene).ok());
 }
 
 }  // namespace
