@@ -4,6 +4,7 @@
 //       [--width W --height H] [--param NAME=VALUE ...]
 // Writes DIR/frame_0000.exr ... and DIR/stats.json. Ctrl-C cancels cleanly.
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -138,7 +139,12 @@ int main(int argc, char** argv) {
   std::map<std::string, int> left_out_totals;
 
   JobCallbacks callbacks;
+  // Progress at most 4 times a second: a tile-level callback would flood logs.
+  auto last_print = std::chrono::steady_clock::now() - std::chrono::seconds(1);
   callbacks.on_progress = [&](const JobProgress& p) {
+    auto now = std::chrono::steady_clock::now();
+    if (now - last_print < std::chrono::milliseconds(250)) return;
+    last_print = now;
     std::fprintf(stderr, "\r[%3.0f%%] frames %d/%d  ETA %s   ", p.fraction * 100.0, p.frames_done, p.frames_total,
                  p.eta_seconds < 0 ? "--" : (std::to_string(int(p.eta_seconds + 0.5)) + "s").c_str());
     std::fflush(stderr);
