@@ -11,6 +11,7 @@
 #include <exception>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 
 #include <ImfChannelList.h>
@@ -56,6 +57,17 @@ Status check_dimensions(const std::string& path, int64_t width, int64_t height) 
                             std::to_string(height));
   }
   return Status::Ok();
+}
+
+// OpenEXR sizes its line and tile buffers from the header before we see the
+// data window; its own limits stop a hostile header there. Process-wide, but
+// OpenEXR is only used through this file.
+void limit_openexr_sizes() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    Imf::Header::setMaxImageSize(int(kMaxDimension), int(kMaxDimension));
+    Imf::Header::setMaxTileSize(int(kMaxDimension), int(kMaxDimension));
+  });
 }
 
 bool has_exr_magic(const std::string& path) {
@@ -246,6 +258,7 @@ Status validate_layers(const std::string& path, const LayeredImage& image) {
 Expected<Image> read_rgb_image(const std::string& path, bool raw) {
   if (!file_exists(path)) return not_found(path + ": no such file or not readable");
   if (!has_exr_magic(path)) return read_stb_rgb(path, raw);
+  limit_openexr_sizes();
   try {
     return read_exr_rgb(path);
   } catch (const std::exception& e) {
@@ -258,6 +271,7 @@ Status write_exr(const std::string& path, const LayeredImage& image, bool half_f
   const int width = image.layers.front().image.width();
   const int height = image.layers.front().image.height();
   const std::string tmp = temporary_path_for(path);
+  limit_openexr_sizes();
   try {
     Imf::Header header(width, height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -304,6 +318,7 @@ Status write_exr(const std::string& path, const LayeredImage& image, bool half_f
 
 Expected<LayeredImage> read_exr(const std::string& path) {
   if (!file_exists(path)) return not_found(path + ": no such file or not readable");
+  limit_openexr_sizes();
   try {
     Imf::MultiPartInputFile file(path.c_str());
     LayeredImage result;

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -149,6 +151,34 @@ TEST(ExrRead, TruncatedAndCorruptFilesGiveErrors) {
   EXPECT_FALSE(read_rgb_image(magic_only).ok());
 
   for (const auto& p : {good, truncated, corrupt, magic_only}) std::remove(p.c_str());
+}
+
+TEST(ExrRead, MutatedFilesNeverCrash) {
+  // Cheap deterministic fuzzing: single-byte corruptions across the header
+  // and offset table, where OpenEXR trusts sizes and offsets most.
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(13, 11, 3, 1.0f));
+  img.add("dx", {"Y"}, ramp(13, 11, 1, 2.0f));
+  const std::string good = scratch("fuzz_src.exr");
+  ASSERT_TRUE(write_exr(good, img).ok());
+  std::ifstream in(good, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
+  const std::string mutated = scratch("fuzz.exr");
+  uint32_t state = 12345;
+  int failures = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    state = state * 1664525u + 1013904223u;
+    std::vector<char> m = bytes;
+    const size_t pos = 4 + (state >> 8) % std::min<size_t>(m.size() - 4, 600);
+    m[pos] = char(state >> 24);
+    std::ofstream(mutated, std::ios::binary | std::ios::trunc).write(m.data(), std::streamsize(m.size()));
+    Expected<LayeredImage> r = read_exr(mutated);
+    Expected<Image> rgb = read_rgb_image(mutated);
+    failures += !r.ok() + !rgb.ok();
+  }
+  EXPECT_GT(failures, 0);  // some mutations must have been detected
+  std::remove(good.c_str());
+  std::remove(mutated.c_str());
 }
 
 TEST(ImageIo, MissingFileIsNotFound) {
