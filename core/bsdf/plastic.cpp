@@ -5,6 +5,10 @@
 // `nonlinear`, the denominator is 1 - R Fdr_int. Rough: the Fresnel
 // transmittances become the rough interface's directional transmittance
 // t(cos) tabulated by finalize(), as Mitsuba precomputes.
+#include <map>
+#include <mutex>
+#include <tuple>
+
 #include "core/bsdf/bsdf_lobes.h"
 #include "core/bsdf/fresnel.h"
 #include "core/bsdf/microfacet.h"
@@ -84,17 +88,40 @@ void rough_plastic_precompute(Bsdf* b) {
   constexpr int kRes = Bsdf::kRoughTransmittanceRes;
   float eta = relative_eta(*b);
   // Mitsuba builds these tables with visible-normal sampling regardless of the
-  // BSDF's sample_visible flag.
+  // BSDF's sample_visible flag. ~1M microfacet samples: cache per parameter set,
+  // since scenes and animations re-finalize the same materials.
   MicrofacetDistribution distr(b->distribution, b->alpha_u, b->alpha_u, /*visible = */ true);
+  using Key = std::tuple<int, float, float>;
+  struct Tables {
+    std::array<float, kRes> transmittance;
+    float internal_reflectance;
+  };
+  static std::mutex mutex;
+  static std::map<Key, Tables> cache;
+  Key key{int(distr.type), distr.alpha_u, eta};
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = cache.find(key);
+    if (it != cache.end()) {
+      b->rough_transmittance = it->second.transmittance;
+      b->rough_internal_reflectance = it->second.internal_reflectance;
+      return;
+    }
+  }
+  Tables t;
   float internal = 0.0f;
   for (int i = 0; i < kRes; ++i) {
     float mu = std::max(1e-6f, float(i) / float(kRes - 1));
     Vec3f wi(std::sqrt(1.0f - mu * mu), 0.0f, mu);
-    b->rough_transmittance[i] = microfacet_eval_transmittance(distr, wi, eta);
+    t.transmittance[i] = microfacet_eval_transmittance(distr, wi, eta);
     internal += microfacet_eval_reflectance(distr, wi, 1.0f / eta) * wi.z;
   }
   // Cosine-weighted hemispherical mean of the internal reflectance (2 * mean(R mu)).
-  b->rough_internal_reflectance = internal / float(kRes) * 2.0f;
+  t.internal_reflectance = internal / float(kRes) * 2.0f;
+  b->rough_transmittance = t.transmittance;
+  b->rough_internal_reflectance = t.internal_reflectance;
+  std::lock_guard<std::mutex> lock(mutex);
+  cache.emplace(key, t);
 }
 
 namespace {
