@@ -128,11 +128,12 @@ Expected<Image> ColorTransform::apply(const Image& linear_rgb) const {
     // Row bands in parallel: the ACES output transform is a few hundred
     // flops per pixel, worth spreading for 1080p frames.
     constexpr int kRowsPerTask = 32;
-    tbb::parallel_for(tbb::blocked_range<int>(0, h, kRowsPerTask), [&](const tbb::blocked_range<int>& r) {
-      OCIO::PackedImageDesc desc(out.data().data() + size_t(r.begin()) * w * 3, w,
-                                 r.end() - r.begin(), 3);
-      impl_->cpu->apply(desc);
-    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, h, kRowsPerTask),
+                      [&](const tbb::blocked_range<int>& r) {
+                        OCIO::PackedImageDesc desc(out.data().data() + size_t(r.begin()) * w * 3,
+                                                   w, r.end() - r.begin(), 3);
+                        impl_->cpu->apply(desc);
+                      });
   } catch (const std::exception& e) {
     return internal_error("OCIO apply (view '" + options_.view + "'): " + e.what());
   }

@@ -238,7 +238,10 @@ Expected<std::unique_ptr<VideoEncoder>> VideoEncoder::open(const std::string& pa
   // ---- Muxer ----
   const std::string ext = extension_of(path);
   const AVOutputFormat* ofmt = ext.empty() ? nullptr : av_guess_format(nullptr, path.c_str(), nullptr);
-  if (!ofmt) ofmt = av_guess_format(nullptr, (std::string("x.") + default_video_extension(options.codec)).c_str(), nullptr);
+  if (!ofmt) {
+    const std::string fallback = std::string("out.") + default_video_extension(options.codec);
+    ofmt = av_guess_format(nullptr, fallback.c_str(), nullptr);
+  }
   if (!ofmt) return unimplemented(impl->label + ": no muxer available");
   if (avformat_query_codec(ofmt, codec->id, FF_COMPLIANCE_NORMAL) != 1)
     return invalid_argument(impl->label + ": container '" + ofmt->name + "' cannot hold " +
@@ -265,7 +268,8 @@ Expected<std::unique_ptr<VideoEncoder>> VideoEncoder::open(const std::string& pa
   c->colorspace = setup.matrix;
   c->color_range = setup.range;
   if (options.codec == VideoCodec::kH264) c->chroma_sample_location = AVCHROMA_LOC_LEFT;
-  c->gop_size = std::max(1, int(std::lround(2.0 * options.fps_num / options.fps_den)));  // ~2 s seek granularity
+  // A keyframe every ~2 s: seekable previews without hurting compression.
+  c->gop_size = std::max(1, int(std::lround(2.0 * options.fps_num / options.fps_den)));
   if (ofmt->flags & AVFMT_GLOBALHEADER) c->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
 
   AVDictionary* raw_opts = nullptr;
@@ -333,7 +337,9 @@ Expected<std::unique_ptr<VideoEncoder>> VideoEncoder::open(const std::string& pa
   // ---- Container header ----
   if (!(ofmt->flags & AVFMT_NOFILE)) {
     err = avio_open(&impl->fmt->pb, impl->tmp_path.c_str(), AVIO_FLAG_WRITE);
-    if (err < 0) return internal_error(impl->label + ": cannot create '" + impl->tmp_path + "': " + av_error(err));
+    if (err < 0)
+      return internal_error(impl->label + ": cannot create '" + impl->tmp_path +
+                            "': " + av_error(err));
   }
   AVDictionary* mux_raw = nullptr;
   // Index at the front so players can start before the whole file arrives.
