@@ -6,7 +6,7 @@
 
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
-#include "core/scene/mitsuba_loader.h"
+#include "core/scene/scene_loader.h"
 
 namespace gdvr {
 namespace {
@@ -24,6 +24,7 @@ bool path_is_inside(const fs::path& path, const fs::path& root) {
 struct PreparedJob {
   Scene scene;
   std::vector<int> frames;
+  Animation animation;  // the scene file's own animation, then the job's tracks
   std::vector<bool> animated_shapes;
   FrameRenderSettings render;
 };
@@ -35,8 +36,8 @@ Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions
   if (!options.asset_root.empty() && !path_is_inside(p, options.asset_root))
     return invalid_argument("job.scene: '" + job.scene + "' lies outside the asset root");
   if (!fs::exists(p)) return not_found("job.scene: '" + job.scene + "' does not exist");
-  if (p.extension() != ".xml")
-    return unimplemented("job.scene: '" + job.scene + "' is not a Mitsuba .xml scene");
+  if (!is_supported_scene_file(p.string()))
+    return unimplemented("job.scene: '" + job.scene + "' is not a .xml, .gltf or .glb scene");
   return p.string();
 }
 
@@ -55,18 +56,21 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
   LoadOptions load;
   load.params = job.params;
   load.asset_root = options.asset_root;
-  auto scene = load_mitsuba_scene(path.value(), load);
-  if (!scene.ok()) return scene.status();
+  auto loaded = load_scene(path.value(), load);
+  if (!loaded.ok()) return loaded.status();
 
   PreparedJob prepared;
-  prepared.scene = std::move(scene.value());
+  prepared.scene = std::move(loaded->scene);
+  // Tracks in the job file come after (and override) animation stored in the scene file.
+  prepared.animation = std::move(loaded->animation);
+  for (const Track& t : job.animation.tracks) prepared.animation.tracks.push_back(t);
   auto frames = parse_frame_range(job.frames);
   if (!frames.ok()) return frames.status().with_context("job.frames: ");
   prepared.frames = std::move(frames.value());
-  GDVR_RETURN_IF_ERROR(validate_animation(job.animation, prepared.scene));
+  GDVR_RETURN_IF_ERROR(validate_animation(prepared.animation, prepared.scene));
 
   prepared.animated_shapes.assign(prepared.scene.shapes.size(), false);
-  for (const Track& track : job.animation.tracks)
+  for (const Track& track : prepared.animation.tracks)
     for (size_t i = 0; i < prepared.scene.shapes.size(); ++i)
       if (!track.target.empty() && prepared.scene.shapes[i].id == track.target) prepared.animated_shapes[i] = true;
 
@@ -96,7 +100,7 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
   PreparedJob& pj = prepared.value();
 
   Scene frame_desc = pj.scene;
-  if (!job.animation.empty()) GDVR_RETURN_IF_ERROR(apply_animation(job.animation, pj.frames.front() / job.fps, &frame_desc));
+  if (!pj.animation.empty()) GDVR_RETURN_IF_ERROR(apply_animation(pj.animation, pj.frames.front() / job.fps, &frame_desc));
   auto frame_scene = FrameScene::create(frame_desc, pj.animated_shapes);
   if (!frame_scene.ok()) return frame_scene.status();
   FrameScene& scene = *frame_scene.value();
@@ -123,8 +127,8 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
 
   for (int frame : todo) {
     if (cancel && cancel->load()) return cancelled("job cancelled");
-    if (!job.animation.empty()) {
-      GDVR_RETURN_IF_ERROR(apply_animation(job.animation, frame / job.fps, &frame_desc));
+    if (!pj.animation.empty()) {
+      GDVR_RETURN_IF_ERROR(apply_animation(pj.animation, frame / job.fps, &frame_desc));
       GDVR_RETURN_IF_ERROR(scene.update(frame_desc));
     }
     FrameRenderControl control;
