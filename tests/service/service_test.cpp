@@ -347,11 +347,6 @@ TEST(ServiceLimits, OversizedUploadAndQueueLimit) {
     writer->WritesDone();
     EXPECT_EQ(writer->Finish().error_code(), StatusCode::INVALID_ARGUMENT);
   }
-  {  // A good upload is content-addressed under uploads/ and usable by a job.
-    std::ifstream in(dir.assets() + "/cbox/cbox-rgb.xml");
-    std::string xml((std::istreambuf_iterator<char>(in)), {});
-    (void)xml;
-  }
   // Queue limit: one running + one queued fit; the third is refused.
   v1::SubmitJobResponse r;
   ASSERT_TRUE(submit(stub.get(), "q1", kSlowJob, &r).ok());
