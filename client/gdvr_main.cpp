@@ -1,6 +1,7 @@
 // gdvr: command-line client of gdvr-server.
 //   gdvr [global flags] submit|watch|status|list|cancel|fetch|upload ...
 #include <google/protobuf/util/json_util.h>
+#include <grpcpp/generic/generic_stub.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -30,13 +31,20 @@ commands:
   submit [JOB.json] [--scene S --frames F --width W --height H --spp N --seed N
          --integrator pt|gpt|tgpt --priority P] [--key IDEMPOTENCY_KEY]
          [--upload-dir DIR]  upload DIR as a scene bundle; --scene is then relative to DIR
-         [--watch [--out DIR] [--raw]]
-  watch JOB_ID [--out DIR] [--from FRAME]   resumes after the last frame in DIR
+         [--watch [--out DIR] [--raw] [--no-artifacts]]
+  watch JOB_ID [--out DIR] [--from FRAME] [--no-artifacts]
+                                             resumes after the last frame in DIR
   status JOB_ID
   list [--state queued|running|completed|failed|cancelled] [--limit N]
   cancel JOB_ID
-  fetch JOB_ID --out DIR                     saves the frames final so far
+  fetch JOB_ID --out DIR [--what frames,previews,video,stats]
+                                             saves the job's files as they are now
   upload DIR --scene FILE                    prints the scene path to submit
+  health [--wait SECONDS]                    exit 0 once the server reports SERVING
+
+With --watch/watch and --out, frames are saved as they become final and, when
+the job completes, its previews, video and stats.json are fetched into DIR too
+(unless --no-artifacts).
 
 global flags:
   --server HOST:PORT   (default $GDVR_SERVER or 127.0.0.1:50051)
@@ -57,7 +65,7 @@ struct Args {
   }
 };
 
-const std::vector<std::string> kBoolFlags = {"watch", "raw", "help"};
+const std::vector<std::string> kBoolFlags = {"watch", "raw", "help", "no-artifacts"};
 
 bool parse_args(int argc, char** argv, int start, Args* out, std::string* err) {
   for (int i = start; i < argc; ++i) {
@@ -137,12 +145,85 @@ class ProgressBar {
   bool tty_;
 };
 
+// ---- Artifacts ----
+
+const char* kind_name(v1::ArtifactKind k) {
+  switch (k) {
+    case v1::ARTIFACT_KIND_FRAME: return "frames";
+    case v1::ARTIFACT_KIND_PREVIEW: return "previews";
+    case v1::ARTIFACT_KIND_VIDEO: return "video";
+    case v1::ARTIFACT_KIND_STATS: return "stats";
+    default: return "other";
+  }
+}
+
+// Saves the job's files (of `kinds`; empty: all) into `out_dir`, each through
+// a temporary name and rename so the folder never holds half a file.
+int fetch_artifacts(Connection& conn, const std::string& job_id, const std::vector<v1::ArtifactKind>& kinds,
+                    const std::string& out_dir) {
+  std::error_code ec;
+  fs::create_directories(out_dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "gdvr: fetch: cannot create '%s': %s\n", out_dir.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  v1::FetchArtifactsRequest req;
+  req.set_job_id(job_id);
+  for (auto k : kinds) req.add_kinds(k);
+  auto ctx = conn.context(/* deadline_s = */ 0);
+  auto reader = conn.stub()->FetchArtifacts(ctx.get(), req);
+  v1::ArtifactChunk c;
+  std::ofstream file;
+  std::string name, tmp;
+  uint64_t written = 0;
+  std::map<std::string, int> counts;
+  auto fail = [&](const std::string& msg) {
+    ctx->TryCancel();
+    file.close();
+    if (!tmp.empty()) fs::remove(tmp, ec);
+    std::fprintf(stderr, "gdvr: fetch %s: %s\n", job_id.c_str(), msg.c_str());
+    return kExitError;
+  };
+  while (reader->Read(&c)) {
+    if (c.offset() == 0) {
+      name = c.file_name();
+      // The server names files inside the job folder; refuse anything else.
+      if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
+        return fail("refusing file name '" + name + "'");
+      tmp = out_dir + "/." + name + ".part";
+      file = std::ofstream(tmp, std::ios::binary | std::ios::trunc);
+      written = 0;
+      if (!file) return fail("cannot write '" + tmp + "'");
+    }
+    if (c.file_name() != name || c.offset() != written) return fail("out-of-order chunk of " + c.file_name());
+    file.write(c.data().data(), std::streamsize(c.data().size()));
+    written += c.data().size();
+    if (c.last()) {
+      file.close();
+      if (!file || written != c.total_size()) return fail("short write of " + name);
+      fs::rename(tmp, out_dir + "/" + name, ec);
+      if (ec) return fail("cannot rename into '" + out_dir + "/" + name + "': " + ec.message());
+      tmp.clear();
+      ++counts[kind_name(c.kind())];
+    }
+  }
+  grpc::Status st = reader->Finish();
+  if (!st.ok()) {
+    if (!tmp.empty()) fs::remove(tmp, ec);
+    return report_rpc_error("fetch " + job_id, st, conn.options());
+  }
+  std::string summary;
+  for (const auto& [k, n] : counts) summary += (summary.empty() ? "" : ", ") + std::to_string(n) + " " + k;
+  std::fprintf(stderr, "gdvr: fetched %s into %s\n", summary.empty() ? "nothing" : summary.c_str(), out_dir.c_str());
+  return kExitOk;
+}
+
 // ---- Watching ----
 
 // Streams a job's events into `out_dir`, reconnecting (and resuming after the
 // last saved frame) when the server goes away, e.g. during a restart.
 int watch_job(Connection& conn, const std::string& job_id, const std::string& out_dir, int from_frame,
-              bool stop_when_caught_up = false, int caught_up_frames = 0) {
+              bool stop_when_caught_up = false, int caught_up_frames = 0, bool fetch_outputs = false) {
   ProgressBar bar;
   FrameSink sink(out_dir);
   int next = from_frame;
@@ -198,6 +279,11 @@ int watch_job(Connection& conn, const std::string& job_id, const std::string& ou
           bar.done();
           std::fprintf(stderr, "gdvr: job %s completed%s%s\n", job_id.c_str(), out_dir.empty() ? "" : "; frames in ",
                        out_dir.c_str());
+          // Frames came with the stream; the rest is made at completion.
+          if (fetch_outputs && !out_dir.empty())
+            return fetch_artifacts(conn, job_id,
+                                   {v1::ARTIFACT_KIND_PREVIEW, v1::ARTIFACT_KIND_VIDEO, v1::ARTIFACT_KIND_STATS},
+                                   out_dir);
           return kExitOk;
         case v1::JobEvent::kFailed:
           bar.done();
@@ -341,7 +427,7 @@ int cmd_submit(Connection& conn, const Args& a) {
   std::fprintf(stderr, "gdvr: %s job %s (%d frames)\n", resp.existing() ? "existing" : "submitted",
                resp.job_id().c_str(), resp.job().frames_size());
   if (!a.has("watch")) return kExitOk;
-  return watch_job(conn, resp.job_id(), a.get("out"), -1);
+  return watch_job(conn, resp.job_id(), a.get("out"), -1, false, 0, !a.has("no-artifacts"));
 }
 
 int cmd_watch(Connection& conn, const Args& a) {
@@ -349,7 +435,7 @@ int cmd_watch(Connection& conn, const Args& a) {
   std::string out = a.get("out");
   int from = a.has("from") ? std::atoi(a.get("from").c_str()) : (out.empty() ? -1 : FrameSink::resume_frame(out));
   if (from >= 0 && !a.has("from")) std::fprintf(stderr, "gdvr: resuming from frame %d\n", from);
-  return watch_job(conn, a.positional[0], out, from);
+  return watch_job(conn, a.positional[0], out, from, false, 0, !a.has("no-artifacts"));
 }
 
 void print_job(const v1::Job& j) {
@@ -409,19 +495,80 @@ int cmd_cancel(Connection& conn, const Args& a) {
 
 int cmd_fetch(Connection& conn, const Args& a) {
   if (a.positional.empty() || !a.has("out"))
-    return std::fprintf(stderr, "gdvr: fetch: usage: gdvr fetch JOB_ID --out DIR\n"), kExitUsage;
-  v1::GetJobRequest req;
-  req.set_job_id(a.positional[0]);
-  v1::Job job;
-  auto ctx = conn.context();
-  grpc::Status st = conn.stub()->GetJob(ctx.get(), req, &job);
-  if (!st.ok()) return report_rpc_error("fetch " + a.positional[0], st, conn.options());
-  if (job.final_frames_size() == 0) {
-    std::fprintf(stderr, "gdvr: fetch: job %s has no final frame yet\n", job.id().c_str());
-    return kExitOk;
+    return std::fprintf(stderr, "gdvr: fetch: usage: gdvr fetch JOB_ID --out DIR [--what ...]\n"), kExitUsage;
+  std::vector<v1::ArtifactKind> kinds;
+  std::stringstream what(a.get("what"));
+  std::string w;
+  while (std::getline(what, w, ',')) {
+    if (w == "frames") kinds.push_back(v1::ARTIFACT_KIND_FRAME);
+    else if (w == "previews") kinds.push_back(v1::ARTIFACT_KIND_PREVIEW);
+    else if (w == "video") kinds.push_back(v1::ARTIFACT_KIND_VIDEO);
+    else if (w == "stats") kinds.push_back(v1::ARTIFACT_KIND_STATS);
+    else if (!w.empty())
+      return std::fprintf(stderr, "gdvr: fetch: --what takes frames,previews,video,stats, not '%s'\n", w.c_str()),
+             kExitUsage;
   }
-  return watch_job(conn, job.id(), a.get("out"), job.final_frames(0), /* stop_when_caught_up = */ true,
-                   job.final_frames_size());
+  return fetch_artifacts(conn, a.positional[0], kinds, a.get("out"));
+}
+
+// grpc.health.v1.Health/Check for the whole server (service ""), through a
+// generic call so the CLI needs no health stubs: the request is empty and the
+// response's field 1 is the status (1 SERVING, 2 NOT_SERVING).
+std::string health_check(const ConnectionOptions& opts, std::string* error) {
+  grpc::ChannelArguments args;
+  std::shared_ptr<grpc::ChannelCredentials> creds = grpc::InsecureChannelCredentials();
+  if (!opts.tls_ca.empty()) {
+    grpc::SslCredentialsOptions ssl;
+    std::ifstream in(opts.tls_ca);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    ssl.pem_root_certs = ss.str();
+    creds = grpc::SslCredentials(ssl);
+  }
+  auto channel = grpc::CreateCustomChannel(opts.server, creds, args);
+  grpc::GenericStub stub(channel);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(3));
+  grpc::Slice empty("");
+  grpc::ByteBuffer req(&empty, 1), resp;
+  grpc::CompletionQueue cq;
+  auto call = stub.PrepareUnaryCall(&ctx, "/grpc.health.v1.Health/Check", req, &cq);
+  call->StartCall();
+  grpc::Status st;
+  call->Finish(&resp, &st, reinterpret_cast<void*>(1));
+  void* tag;
+  bool ok;
+  cq.Next(&tag, &ok);
+  cq.Shutdown();
+  while (cq.Next(&tag, &ok)) {}
+  if (!st.ok()) {
+    *error = st.error_message();
+    return "UNREACHABLE";
+  }
+  std::vector<grpc::Slice> slices;
+  (void)resp.Dump(&slices);
+  std::string bytes;
+  for (auto& sl : slices) bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
+  int v = bytes.size() >= 2 && bytes[0] == 0x08 ? bytes[1] : 0;
+  return v == 1 ? "SERVING" : v == 2 ? "NOT_SERVING" : "UNKNOWN";
+}
+
+int cmd_health(const ConnectionOptions& opts, const Args& a) {
+  double wait_s = a.has("wait") ? std::atof(a.get("wait").c_str()) : 0;
+  auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(int64_t(wait_s * 1000));
+  std::string status, error;
+  for (;;) {
+    status = health_check(opts, &error);
+    if (status == "SERVING" || std::chrono::steady_clock::now() >= deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  std::printf("%s\n", status.c_str());
+  if (status == "SERVING") return kExitOk;
+  if (status == "UNREACHABLE") {
+    std::fprintf(stderr, "gdvr: health: cannot reach gdvr-server at %s (%s)\n", opts.server.c_str(), error.c_str());
+    return kExitUnreachable;
+  }
+  return kExitError;
 }
 
 int cmd_upload(Connection& conn, const Args& a) {
@@ -484,6 +631,7 @@ int main(int argc, char** argv) {
   if (cmd == "cancel") return cmd_cancel(conn, args);
   if (cmd == "fetch") return cmd_fetch(conn, args);
   if (cmd == "upload") return cmd_upload(conn, args);
+  if (cmd == "health") return cmd_health(opts, args);
   std::fprintf(stderr, "gdvr: unknown command '%s'\n%s", cmd.c_str(), kUsage);
   return kExitUsage;
 }

@@ -32,6 +32,8 @@ std::string server_usage() {
   --asset-root=DIR          scenes named by jobs must lie under it (default .)
   --output-root=DIR         frames go to DIR/<job id>/frame_0001.exr (default gdvr-output)
   --db=PATH                 SQLite job database (default <output-root>/gdvr.db)
+  --ocio-config=PATH        OCIO config for previews and video (default: the shipped
+                            data/ocio/config.ocio); $OCIO, when set, takes priority
   --concurrency=N           jobs rendering at once (default 1)
   --threads=N               render threads in all (default 0: all cores)
   --max-width=N --max-height=N --max-spp=N --max-frames=N
@@ -82,6 +84,7 @@ Expected<ServerConfig> parse_server_flags(int argc, char** argv) {
     else if (flag == "asset-root") c.asset_root = value;
     else if (flag == "output-root") c.output_root = value;
     else if (flag == "db") c.db_path = value;
+    else if (flag == "ocio-config") c.ocio_config = value;
     else if (flag == "token-file") token_file = value;
     else if (flag == "tls-cert") c.tls_cert = value;
     else if (flag == "tls-key") c.tls_key = value;

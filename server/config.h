@@ -8,6 +8,10 @@
 
 #include "core/util/status.h"
 
+#ifndef GDVR_SHIPPED_OCIO_CONFIG
+#define GDVR_SHIPPED_OCIO_CONFIG "data/ocio/config.ocio"
+#endif
+
 namespace gdvr::server {
 
 // Request limits: a request over one gets RESOURCE_EXHAUSTED naming the field.
@@ -27,6 +31,9 @@ struct ServerConfig {
   std::string asset_root = ".";            // jobs name scenes under it
   std::string output_root = "gdvr-output"; // <output_root>/<job id>/frame_0001.exr
   std::string db_path;                     // default: <output_root>/gdvr.db
+  // OCIO config for previews and video; $OCIO, when set, takes priority (the
+  // VFX-wide convention). Default: the config shipped in data/ocio.
+  std::string ocio_config = GDVR_SHIPPED_OCIO_CONFIG;
   int concurrency = 1;                     // jobs rendering at once
   int threads = 0;                         // render threads in all; 0: all cores
   Limits limits;

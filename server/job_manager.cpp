@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "core/io/image_io.h"
+#include "server/job_outputs.h"
 #include "server/log.h"
 #include "server/status_map.h"
 #include "server/translate.h"
@@ -26,6 +27,11 @@ constexpr size_t kChunkBytes = 1 << 20;  // the API promises chunks of at most 1
 int64_t now_ms() {
   using namespace std::chrono;
   return duration_cast<milliseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+int64_t now_us() {
+  using namespace std::chrono;
+  return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
 }
 
 std::string new_job_id() {
@@ -141,6 +147,7 @@ Status JobManager::validate(const v1::JobSpec& spec, JobSpec* core_job, std::vec
   opts.base_dir = config_.asset_root;
   opts.asset_root = config_.asset_root;
   GDVR_RETURN_IF_ERROR(validate_job(*core, opts));
+  GDVR_RETURN_IF_ERROR(JobOutputs::validate(*core, config_.ocio_config, config_.asset_root, parsed->front()));
   if (core_job) *core_job = std::move(*core);
   if (frames) *frames = std::move(*parsed);
   return Status::Ok();
@@ -191,6 +198,10 @@ Status JobManager::recover() {
       }
     } else {
       st = spec.status();
+    }
+    if (job->state == v1::JOB_STATE_COMPLETED && st.ok()) {
+      std::string video = video_file_name(job->core.outputs.video_codec);
+      if (!video.empty() && fs::exists(job_dir(job->id) + "/" + video, ec)) job->video_file = video;
     }
     job->progress.set_frames_total(int(job->frames.size()));
     job->progress.set_frames_done(int(job->final_frames.size()));
@@ -380,35 +391,48 @@ void JobManager::run(Job* job) {
   std::string dir = job_dir(job->id);
   std::error_code ec;
   fs::create_directories(dir, ec);
+  remove_stale_temporaries(dir);
 
   Status frame_error = Status::Ok();
+  auto fail_run = [&](const Status& st) {
+    frame_error = st;
+    job->cancel = true;
+  };
+  // Previews, video and relMSE. A fresh encoder per run: see job_outputs.h
+  // for why that keeps the video whole across kill -9 and restart.
+  std::unique_ptr<JobOutputs> outputs;
+  if (auto o = JobOutputs::open(job->core, job->frames, dir, config_.ocio_config, config_.asset_root); o.ok())
+    outputs = std::move(*o);
+  else
+    frame_error = o.status();
   JobCallbacks cb;
   cb.on_frame_final = [&](const FrameOutput& out) {
     if (!frame_error.ok()) return;
     std::string name = frame_file_name(out.frame);
     std::string path = dir + "/" + name;
     Status st = write_exr(path, out.image);  // atomic: temporary file + rename
-    if (!st.ok()) {
-      frame_error = st.with_context("writing " + path + ": ");
-      job->cancel = true;
-      return;
-    }
+    if (!st.ok()) return fail_run(st.with_context("writing " + path + ": "));
     FrameRecord rec;
     rec.file = name;
     rec.size = uint64_t(fs::file_size(path, ec));
     to_proto(out.stats, &rec.stats);
     rec.stats.set_frame(out.frame);
+    // The preview is written before the frame is persisted, so every frame a
+    // restart treats as final has its preview too.
+    double rel = -1;
+    std::vector<std::string> notes;
+    st = outputs->prepare_frame(out.frame, out.image, &rel, &notes);
+    if (!st.ok()) return fail_run(st.with_context("frame " + std::to_string(out.frame) + " outputs: "));
+    rec.stats.set_rel_mse(rel);
+    for (auto& n : notes) rec.stats.add_left_out(n);
     // Persist before announcing: a watcher must never be told about a frame
     // that a restart would forget.
     StoredFrame sf{out.frame, name, rec.size, rec.stats.SerializeAsString()};
     st = store_->insert_frame(job->id, sf);
-    if (!st.ok()) {
-      frame_error = st;
-      job->cancel = true;
-      return;
-    }
+    if (!st.ok()) return fail_run(st);
     {
       std::lock_guard<std::mutex> lock(mu_);
+      rec.final_us = now_us();
       job->final_frames[out.frame] = rec;
       job->progress.set_frames_done(int(job->final_frames.size()));
       ++job->progress_seq;
@@ -418,6 +442,9 @@ void JobManager::run(Job* job) {
     log_event("info", "frame_final",
               {{"job", job->id}, {"frame", std::to_string(out.frame)},
                {"render_s", std::to_string(out.stats.render_seconds)}, {"bytes", std::to_string(rec.size)}});
+    // After the announcement: encoding must not delay the watchers.
+    st = outputs->add_to_video(out.frame);
+    if (!st.ok()) return fail_run(st.with_context("frame " + std::to_string(out.frame) + ": "));
   };
   cb.on_progress = [&](const JobProgress& p) {
     {
@@ -431,7 +458,17 @@ void JobManager::run(Job* job) {
     cv_.notify_all();
   };
 
-  Status st = run_job(job->core, opts, cb, &job->cancel);
+  Status st = frame_error.ok() ? run_job(job->core, opts, cb, &job->cancel) : frame_error;
+  std::string video;
+  if (st.ok() && frame_error.ok()) {
+    // Finishing (catch-up of frames an earlier run made final, trailer,
+    // rename into place) happens before COMPLETED is announced, so a
+    // completed job always has its video.
+    auto v = outputs->finish();
+    if (v.ok()) video = *v;
+    else frame_error = v.status();
+  }
+  outputs.reset();  // an unfinished encoder deletes its partial file
 
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -439,6 +476,7 @@ void JobManager::run(Job* job) {
       finish_locked(job, v1::JOB_STATE_FAILED, frame_error.message(),
                     grpc_code_name(to_grpc_code(frame_error.code())));
     } else if (st.ok()) {
+      job->video_file = video;
       job->progress.set_fraction(1);
       job->progress.set_eta_seconds(0);
       finish_locked(job, v1::JOB_STATE_COMPLETED, "", "");
@@ -521,6 +559,34 @@ v1::Job JobManager::to_proto_locked(const Job& j) const {
   out.set_finished_unix_ms(j.finished_ms);
   out.set_output_dir(job_dir(j.id));
   out.set_queue_position(queue_position_locked(j));
+  out.set_video_file(j.video_file);
+  return out;
+}
+
+// ---- Artifacts ----
+
+Expected<std::vector<JobManager::Artifact>> JobManager::artifacts(const std::string& id,
+                                                                const std::vector<v1::ArtifactKind>& kinds) const {
+  auto wanted = [&](v1::ArtifactKind k) {
+    return kinds.empty() || std::find(kinds.begin(), kinds.end(), k) != kinds.end();
+  };
+  std::vector<Artifact> out;
+  std::lock_guard<std::mutex> lock(mu_);
+  auto it = jobs_.find(id);
+  if (it == jobs_.end()) return not_found("job_id: no job '" + id + "'");
+  const Job& j = *it->second;
+  // Names come from the job's own records, never from the request, so a
+  // client cannot name a path outside the job's folder.
+  std::string dir = job_dir(id);
+  std::error_code ec;
+  if (wanted(v1::ARTIFACT_KIND_FRAME))
+    for (const auto& [f, rec] : j.final_frames) out.push_back({rec.file, v1::ARTIFACT_KIND_FRAME});
+  if (wanted(v1::ARTIFACT_KIND_PREVIEW))
+    for (const auto& [f, rec] : j.final_frames)
+      if (fs::exists(dir + "/" + preview_file_name(f), ec)) out.push_back({preview_file_name(f), v1::ARTIFACT_KIND_PREVIEW});
+  if (wanted(v1::ARTIFACT_KIND_VIDEO) && !j.video_file.empty()) out.push_back({j.video_file, v1::ARTIFACT_KIND_VIDEO});
+  if (wanted(v1::ARTIFACT_KIND_STATS) && fs::exists(dir + "/stats.json", ec))
+    out.push_back({"stats.json", v1::ARTIFACT_KIND_STATS});
   return out;
 }
 
@@ -577,6 +643,7 @@ bool JobManager::send_frame(const Job& job, int frame, const FrameRecord& rec, b
         ff->set_last(true);
         *ff->mutable_stats() = rec.stats;
         *ff->mutable_progress() = progress;
+        ff->set_final_unix_us(rec.final_us);
       }
       if (!send(ev)) return false;
     } while (offset < bytes.size());

@@ -51,11 +51,21 @@ class JobManager {
   // Checks a spec against the server limits and core's validate_job.
   Status validate(const v1::JobSpec& spec, JobSpec* core_job, std::vector<int>* frames) const;
 
+  struct Artifact {
+    std::string file;  // a plain name inside the job's folder
+    v1::ArtifactKind kind;
+  };
+  // The job's output files that exist now, in a stable order (frames,
+  // previews, video, stats); `kinds` empty: all.
+  Expected<std::vector<Artifact>> artifacts(const std::string& id, const std::vector<v1::ArtifactKind>& kinds) const;
+  std::string job_dir(const std::string& id) const;
+
  private:
   struct FrameRecord {
     std::string file;
     uint64_t size = 0;
     v1::FrameStats stats;
+    int64_t final_us = 0;  // when it became final in this process; 0: before a restart
   };
   struct Job {
     std::string id, idempotency_key;
@@ -70,6 +80,7 @@ class JobManager {
     std::vector<int> skipped;  // final before this run started
     std::string reason, reason_code;
     int64_t created_ms = 0, started_ms = 0, finished_ms = 0;
+    std::string video_file;  // set once the video is finished
     v1::Progress progress;
     uint64_t progress_seq = 0;
     std::atomic<bool> cancel{false};  // read by run_job once per tile
@@ -83,7 +94,6 @@ class JobManager {
   void write_stats_json(const Job& job) const;  // call with mu_ held
   v1::Job to_proto_locked(const Job& job) const;
   int queue_position_locked(const Job& job) const;
-  std::string job_dir(const std::string& id) const;
   Status persist_state_locked(const Job& job);
   bool send_frame(const Job& job, int frame, const FrameRecord& rec, bool raw,
                   const std::function<bool(const v1::JobEvent&)>& send, const v1::Progress& progress);

@@ -1,5 +1,8 @@
 #include "server/render_service.h"
 
+#include <fstream>
+#include <vector>
+
 #include "server/log.h"
 #include "server/scene_upload.h"
 #include "server/status_map.h"
@@ -102,6 +105,50 @@ grpc::Status RenderServiceImpl::UploadScene(grpc::ServerContext* ctx,
   resp->set_files(done->files);
   log_event("info", "scene_uploaded", {{"hash", done->hash}, {"bytes", std::to_string(done->total_bytes)},
                                        {"files", std::to_string(done->files)}});
+  return grpc::Status::OK;
+}
+
+grpc::Status RenderServiceImpl::FetchArtifacts(grpc::ServerContext* ctx, const v1::FetchArtifactsRequest* req,
+                                               grpc::ServerWriter<v1::ArtifactChunk>* writer) {
+  if (auto st = check_auth(ctx); !st.ok()) return st;
+  std::vector<v1::ArtifactKind> kinds;
+  for (int k : req->kinds()) {
+    if (!v1::ArtifactKind_IsValid(k) || k == v1::ARTIFACT_KIND_UNSPECIFIED)
+      return logged("FetchArtifacts", req->job_id(),
+                    grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "kinds: unknown kind " + std::to_string(k)));
+    kinds.push_back(v1::ArtifactKind(k));
+  }
+  auto list = jobs_->artifacts(req->job_id(), kinds);
+  if (!list.ok()) return logged("FetchArtifacts", req->job_id(), to_grpc_status(list.status()));
+  const std::string dir = jobs_->job_dir(req->job_id());
+  constexpr size_t kChunk = 1 << 20;  // the API's 1 MiB chunk bound
+  std::vector<char> buf(kChunk);
+  for (const auto& a : *list) {
+    std::ifstream in(dir + "/" + a.file, std::ios::binary | std::ios::ate);
+    if (!in) {
+      return logged("FetchArtifacts", req->job_id(),
+                    grpc::Status(grpc::StatusCode::INTERNAL, "cannot read " + a.file + " on the server"));
+    }
+    uint64_t total = uint64_t(in.tellg());
+    in.seekg(0);
+    uint64_t offset = 0;
+    do {
+      size_t n = size_t(std::min<uint64_t>(kChunk, total - offset));
+      in.read(buf.data(), std::streamsize(n));
+      if (size_t(in.gcount()) != n)
+        return logged("FetchArtifacts", req->job_id(),
+                      grpc::Status(grpc::StatusCode::INTERNAL, a.file + " changed while it was sent"));
+      v1::ArtifactChunk c;
+      c.set_file_name(a.file);
+      c.set_kind(a.kind);
+      c.set_offset(offset);
+      c.set_total_size(total);
+      c.set_data(buf.data(), n);
+      offset += n;
+      c.set_last(offset == total);
+      if (!writer->Write(c)) return grpc::Status(grpc::StatusCode::CANCELLED, "client went away");
+    } while (offset < total);
+  }
   return grpc::Status::OK;
 }
 

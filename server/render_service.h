@@ -25,6 +25,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   grpc::Status CancelJob(grpc::ServerContext* ctx, const v1::CancelJobRequest* req, v1::Job* resp) override;
   grpc::Status UploadScene(grpc::ServerContext* ctx, grpc::ServerReader<v1::UploadSceneChunk>* reader,
                            v1::UploadSceneResponse* resp) override;
+  grpc::Status FetchArtifacts(grpc::ServerContext* ctx, const v1::FetchArtifactsRequest* req,
+                              grpc::ServerWriter<v1::ArtifactChunk>* writer) override;
 
  private:
   grpc::Status check_auth(grpc::ServerContext* ctx) const;

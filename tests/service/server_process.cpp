@@ -96,7 +96,10 @@ int ServerProcess::terminate() {
 std::shared_ptr<grpc::Channel> ServerProcess::channel() const {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(16 << 20);
-  return grpc::CreateCustomChannel(address(), grpc::InsecureChannelCredentials(), args);
+  if (tls_ca_.empty()) return grpc::CreateCustomChannel(address(), grpc::InsecureChannelCredentials(), args);
+  grpc::SslCredentialsOptions ssl;
+  ssl.pem_root_certs = tls_ca_;
+  return grpc::CreateCustomChannel(address(), grpc::SslCredentials(ssl), args);
 }
 
 std::string health_status(const std::shared_ptr<grpc::Channel>& channel) {

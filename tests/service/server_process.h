@@ -34,6 +34,10 @@ class ServerProcess {
                 std::map<std::string, std::string> env = {});
   ~ServerProcess();  // SIGKILL if still running
 
+  // Connect over TLS trusting `ca_pem` (PEM text) from then on, e.g. for a
+  // server started with --tls-cert/--tls-key.
+  void use_tls(std::string ca_pem) { tls_ca_ = std::move(ca_pem); }
+
   bool start();       // waits until the port file appears and health answers
   void kill9();
   int terminate();    // SIGTERM; returns the exit status (-1 on timeout)
@@ -50,6 +54,7 @@ class ServerProcess {
   pid_t pid_ = -1;
   int port_ = 0;
   std::string log_;
+  std::string tls_ca_;
 };
 
 // grpc.health.v1 Check for the overall server ("" service).

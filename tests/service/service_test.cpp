@@ -4,11 +4,18 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 
+extern "C" {
+#include <libavformat/avformat.h>
+}
+
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "core/io/image_io.h"
@@ -135,6 +142,65 @@ v1::Job get_job(v1::RenderService::Stub* stub, const std::string& id) {
   return job;
 }
 
+// Frames (packets) of the one video stream in `path`; -1 when it does not open.
+int video_frame_count(const std::string& path, int* width = nullptr, int* height = nullptr) {
+  AVFormatContext* fmt = nullptr;
+  if (avformat_open_input(&fmt, path.c_str(), nullptr, nullptr) != 0) return -1;
+  int frames = -1;
+  if (avformat_find_stream_info(fmt, nullptr) >= 0 && fmt->nb_streams == 1) {
+    if (width) *width = fmt->streams[0]->codecpar->width;
+    if (height) *height = fmt->streams[0]->codecpar->height;
+    frames = 0;
+    AVPacket* pkt = av_packet_alloc();
+    while (av_read_frame(fmt, pkt) >= 0) {
+      ++frames;
+      av_packet_unref(pkt);
+    }
+    av_packet_free(&pkt);
+  }
+  avformat_close_input(&fmt);
+  return frames;
+}
+
+std::string preview_name(int frame) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "preview_%04d.png", frame);
+  return buf;
+}
+
+bool is_png(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char sig[8] = {};
+  in.read(sig, 8);
+  return in && std::string(sig, 8) == std::string("\x89PNG\r\n\x1a\n", 8);
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// FetchArtifacts into a map file name -> bytes.
+std::map<std::string, std::string> fetch(v1::RenderService::Stub* stub, const std::string& id,
+                                         std::vector<v1::ArtifactKind> kinds = {}) {
+  grpc::ClientContext ctx;
+  v1::FetchArtifactsRequest req;
+  req.set_job_id(id);
+  for (auto k : kinds) req.add_kinds(k);
+  auto reader = stub->FetchArtifacts(&ctx, req);
+  std::map<std::string, std::string> files;
+  v1::ArtifactChunk c;
+  while (reader->Read(&c)) {
+    EXPECT_LE(c.data().size(), size_t(1) << 20);
+    EXPECT_EQ(c.offset(), files[c.file_name()].size());
+    files[c.file_name()] += c.data();
+    if (c.last()) EXPECT_EQ(files[c.file_name()].size(), c.total_size());
+  }
+  grpc::Status st = reader->Finish();
+  EXPECT_TRUE(st.ok()) << st.error_message();
+  return files;
+}
+
 class ServiceTest : public ::testing::Test {
  protected:
   void SetUp() override { ASSERT_TRUE(server_.start()) << "server did not start; log: " << server_.log_path(); }
@@ -241,9 +307,18 @@ TEST_F(ServiceTest, KillNineAndRestartResumes) {
   EXPECT_EQ(job.final_frames_size(), 8);
   auto ref = reference(kSlowJob, dir_);
   for (int f = 1; f <= 8; ++f) expect_same(decode(w.exr[f], dir_.path() + "/got.exr"), ref[f], f);
+  // The video was begun again after the restart (re-encoding the frames the
+  // first run made final) and holds every frame once, in order.
+  EXPECT_EQ(job.video_file(), "video.mp4");
+  EXPECT_EQ(video_frame_count(dir_.out() + "/" + id + "/video.mp4"), 8);
+  for (int f = 1; f <= 8; ++f) EXPECT_TRUE(is_png(dir_.out() + "/" + id + "/" + preview_name(f))) << f;
   // No stray temporary files left by the crash.
-  for (const auto& e : fs::directory_iterator(dir_.out() + "/" + id))
-    EXPECT_TRUE(e.path().extension() == ".exr" || e.path().filename() == "stats.json") << e.path();
+  for (const auto& e : fs::directory_iterator(dir_.out() + "/" + id)) {
+    std::string name = e.path().filename().string();
+    EXPECT_TRUE(e.path().extension() == ".exr" || e.path().extension() == ".png" || name == "video.mp4" ||
+                name == "stats.json")
+        << e.path();
+  }
 }
 
 TEST_F(ServiceTest, SigtermShutsDownGracefully) {
@@ -287,6 +362,16 @@ TEST_F(ServiceTest, BadInputsGetTheRightStatus) {
       {"no scene", "{}", StatusCode::INVALID_ARGUMENT, "scene"},
       {"unknown integrator", R"({"scene": "cbox/cbox-rgb.xml", "integrator": "magic"})", StatusCode::INVALID_ARGUMENT,
        "integrator"},
+      {"unknown OCIO view", R"({"scene": "cbox/cbox-rgb.xml", "outputs": {"ocio_view": "No Such View"}})",
+       StatusCode::INVALID_ARGUMENT, "ocio"},
+      {"unknown codec", R"({"scene": "cbox/cbox-rgb.xml", "outputs": {"video_codec": "vp9"}})",
+       StatusCode::INVALID_ARGUMENT, "video_codec"},
+      {"missing reference", R"({"scene": "cbox/cbox-rgb.xml", "reference": "cbox/nope.exr"})", StatusCode::NOT_FOUND,
+       "reference"},
+      {"reference outside root", R"({"scene": "cbox/cbox-rgb.xml", "reference": "../x.exr"})",
+       StatusCode::INVALID_ARGUMENT, "reference"},
+      {"reference pattern", R"({"scene": "cbox/cbox-rgb.xml", "reference": "ref_%s.exr"})",
+       StatusCode::INVALID_ARGUMENT, "reference"},
   };
   auto stub = server_.stub();
   for (const auto& c : cases) {
@@ -390,6 +475,183 @@ TEST(ServiceAuth, MissingOrWrongTokenIsUnauthenticated) {
   ASSERT_TRUE(stub->ListJobs(&ctx, lr, &list).ok());
   EXPECT_EQ(list.jobs_size(), 1);
   EXPECT_EQ(health_status(server.channel()), "SERVING");  // probes need no token
+}
+
+// ---- Outputs: previews, video, artifacts ----
+
+TEST_F(ServiceTest, PreviewsAndVideoPerJob) {
+  auto stub = server_.stub();
+  v1::SubmitJobResponse resp;
+  ASSERT_TRUE(submit(stub.get(), "outputs", kSmallJob, &resp).ok());
+  Watched w = watch(stub.get(), resp.job_id());
+  ASSERT_EQ(w.terminal, "completed");
+  const std::string dir = dir_.out() + "/" + resp.job_id();
+  for (int f : {1, 2, 3}) EXPECT_TRUE(is_png(dir + "/" + preview_name(f))) << f;
+  v1::Job job = get_job(stub.get(), resp.job_id());
+  EXPECT_EQ(job.video_file(), "video.mp4");
+  int width = 0, height = 0;
+  EXPECT_EQ(video_frame_count(dir + "/video.mp4", &width, &height), 3);
+  EXPECT_EQ(width, 32);
+  EXPECT_EQ(height, 32);
+  // FetchArtifacts returns exactly those files, byte for byte.
+  auto files = fetch(stub.get(), resp.job_id());
+  std::set<std::string> names;
+  for (const auto& [name, bytes] : files) {
+    names.insert(name);
+    EXPECT_EQ(bytes, slurp(dir + "/" + name)) << name;
+  }
+  EXPECT_EQ(names, (std::set<std::string>{"frame_0001.exr", "frame_0002.exr", "frame_0003.exr", "preview_0001.png",
+                                          "preview_0002.png", "preview_0003.png", "video.mp4", "stats.json"}));
+  auto only_video = fetch(stub.get(), resp.job_id(), {v1::ARTIFACT_KIND_VIDEO});
+  EXPECT_EQ(only_video.size(), 1u);
+  EXPECT_EQ(only_video.count("video.mp4"), 1u);
+}
+
+TEST_F(ServiceTest, OtherCodecsAndNoOutputs) {
+  auto stub = server_.stub();
+  const std::string ffv1 =
+      R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-2", "width": 32, "height": 32, "spp": 1, "outputs": {"video_codec": "ffv1"}})";
+  const std::string none =
+      R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-2", "width": 32, "height": 32, "spp": 1, "outputs": {"video_codec": "none", "previews": false}})";
+  v1::SubmitJobResponse a, b;
+  ASSERT_TRUE(submit(stub.get(), "ffv1", ffv1, &a).ok());
+  ASSERT_TRUE(submit(stub.get(), "none", none, &b).ok());
+  EXPECT_EQ(watch(stub.get(), a.job_id()).terminal, "completed");
+  EXPECT_EQ(watch(stub.get(), b.job_id()).terminal, "completed");
+  EXPECT_EQ(get_job(stub.get(), a.job_id()).video_file(), "video.mkv");
+  EXPECT_EQ(video_frame_count(dir_.out() + "/" + a.job_id() + "/video.mkv"), 2);
+  EXPECT_EQ(get_job(stub.get(), b.job_id()).video_file(), "");
+  for (const auto& e : fs::directory_iterator(dir_.out() + "/" + b.job_id()))
+    EXPECT_TRUE(e.path().extension() == ".exr" || e.path().filename() == "stats.json") << e.path();
+}
+
+// A reference image gives per-frame relMSE; a corrupt one is refused at submit.
+TEST_F(ServiceTest, ReferenceImageRelMseAndCorruptReference) {
+  auto ref = reference(kSmallJob, dir_);
+  ASSERT_TRUE(write_exr(dir_.assets() + "/ref_0001.exr", ref[1]).ok());
+  std::string job = R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-2", "width": 32, "height": 32, "spp": 2, "seed": 7, "reference": "ref_0001.exr"})";
+  auto stub = server_.stub();
+  v1::SubmitJobResponse resp;
+  ASSERT_TRUE(submit(stub.get(), "ref", job, &resp).ok());
+  ASSERT_EQ(watch(stub.get(), resp.job_id()).terminal, "completed");
+  std::string stats = slurp(dir_.out() + "/" + resp.job_id() + "/stats.json");
+  // Frame 1 is the reference itself; frame 2 (other samples) is not.
+  // (stats.json holds one compact FrameStats JSON object per frame.)
+  EXPECT_NE(stats.find("\"frame\":1,"), std::string::npos) << stats;
+  EXPECT_NE(stats.find("\"rel_mse\":0}"), std::string::npos) << stats;
+  EXPECT_EQ(stats.find("\"rel_mse\":-1"), std::string::npos) << stats;
+
+  { std::ofstream(dir_.assets() + "/garbage.exr", std::ios::binary) << "v/1\x01 this is not an OpenEXR file at all"; }
+  std::ofstream(dir_.assets() + "/empty.exr").close();
+  for (const char* name : {"garbage.exr", "empty.exr"}) {
+    std::string bad = std::string(R"({"scene": "cbox/cbox-rgb.xml", "frames": "1", "reference": ")") + name + "\"}";
+    grpc::Status st = submit(stub.get(), std::string("bad-ref-") + name, bad, &resp);
+    EXPECT_EQ(st.error_code(), StatusCode::INVALID_ARGUMENT) << name << ": " << st.error_message();
+    EXPECT_NE(st.error_message().find("reference"), std::string::npos) << st.error_message();
+  }
+  EXPECT_EQ(health_status(server_.channel()), "SERVING");
+}
+
+// ---- Several clients and jobs at once ----
+
+TEST(ServiceConcurrency, TwoJobsThreeWatchersEach) {
+  TestDir dir;
+  ServerProcess server(dir, {"--concurrency=2"});
+  ASSERT_TRUE(server.start()) << server.log_path();
+  const std::vector<std::string> jobs = {
+      R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-4", "width": 32, "height": 32, "spp": 4, "seed": 3})",
+      R"({"scene": "cbox/cbox-rgb.xml", "frames": "10-14x2", "width": 40, "height": 24, "spp": 4, "seed": 5})"};
+  const std::vector<std::vector<int>> expected = {{1, 2, 3, 4}, {10, 12, 14}};
+  std::vector<std::string> ids;
+  for (size_t j = 0; j < jobs.size(); ++j) {
+    v1::SubmitJobResponse resp;
+    auto stub = server.stub();
+    ASSERT_TRUE(submit(stub.get(), "multi-" + std::to_string(j), jobs[j], &resp).ok());
+    ids.push_back(resp.job_id());
+  }
+  // Three clients per job, each on its own channel, all at once.
+  std::vector<Watched> results(6);
+  std::vector<std::thread> threads;
+  for (int c = 0; c < 6; ++c)
+    threads.emplace_back([&, c] {
+      auto stub = server.stub();
+      results[size_t(c)] = watch(stub.get(), ids[size_t(c % 2)]);
+    });
+  for (auto& t : threads) t.join();
+  for (int c = 0; c < 6; ++c) {
+    const Watched& w = results[size_t(c)];
+    size_t j = size_t(c % 2);
+    EXPECT_TRUE(w.status.ok()) << w.status.error_message();
+    EXPECT_EQ(w.terminal, "completed") << "client " << c;
+    EXPECT_EQ(w.order, expected[j]) << "client " << c;
+    for (int f : expected[j]) {
+      char name[32];
+      std::snprintf(name, sizeof name, "/frame_%04d.exr", f);
+      EXPECT_EQ(w.exr.at(f), slurp(dir.out() + "/" + ids[j] + name)) << "client " << c << " frame " << f;
+    }
+  }
+  auto stub = server.stub();
+  for (const auto& id : ids) {
+    v1::Job job = get_job(stub.get(), id);
+    EXPECT_EQ(job.state(), v1::JOB_STATE_COMPLETED);
+    EXPECT_EQ(video_frame_count(dir.out() + "/" + id + "/video.mp4"), job.frames_size());
+  }
+  EXPECT_EQ(health_status(server.channel()), "SERVING");
+}
+
+// ---- TLS with a bearer token ----
+
+TEST(ServiceTls, SelfSignedCertAndToken) {
+  TestDir dir;
+  const std::string cert = dir.path() + "/cert.pem", key = dir.path() + "/key.pem";
+  // A throwaway self-signed certificate for 127.0.0.1, made now with the
+  // openssl CLI so no key material lives in the repository.
+  std::string cmd = "openssl req -x509 -newkey rsa:2048 -nodes -days 1 -subj /CN=localhost "
+                    "-addext subjectAltName=DNS:localhost,IP:127.0.0.1 -keyout " +
+                    key + " -out " + cert + " >" + dir.path() + "/openssl.log 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << slurp(dir.path() + "/openssl.log");
+  ServerProcess server(dir, {"--tls-cert=" + cert, "--tls-key=" + key}, {{"GDVR_TOKENS", "tls-token"}});
+  server.use_tls(slurp(cert));
+  ASSERT_TRUE(server.start()) << slurp(server.log_path());
+  auto stub = server.stub();
+
+  v1::SubmitJobResponse resp;
+  grpc::Status ok = submit(stub.get(), "tls1", kSmallJob, &resp, "tls-token");
+  ASSERT_TRUE(ok.ok()) << ok.error_message();
+  {
+    grpc::ClientContext ctx;
+    ctx.AddMetadata("authorization", "Bearer tls-token");
+    v1::WatchJobRequest req;
+    req.set_job_id(resp.job_id());
+    auto reader = stub->WatchJob(&ctx, req);
+    v1::JobEvent ev;
+    int frames = 0;
+    bool completed = false;
+    while (reader->Read(&ev)) {
+      frames += ev.has_frame_final() && ev.frame_final().last();
+      completed |= ev.has_completed();
+    }
+    EXPECT_TRUE(reader->Finish().ok());
+    EXPECT_TRUE(completed);
+    EXPECT_EQ(frames, 3);
+  }
+  grpc::Status wrong = submit(stub.get(), "tls2", kSmallJob, &resp, "not-the-token");
+  EXPECT_EQ(wrong.error_code(), StatusCode::UNAUTHENTICATED) << wrong.error_message();
+  grpc::Status missing = submit(stub.get(), "tls3", kSmallJob, &resp);
+  EXPECT_EQ(missing.error_code(), StatusCode::UNAUTHENTICATED) << missing.error_message();
+  {
+    grpc::ClientContext ctx;
+    ctx.AddMetadata("authorization", "Bearer not-the-token");
+    v1::ListJobsRequest lr;
+    v1::ListJobsResponse list;
+    EXPECT_EQ(stub->ListJobs(&ctx, lr, &list).error_code(), StatusCode::UNAUTHENTICATED);
+  }
+  // A plaintext client cannot talk to the TLS port at all.
+  auto plain = v1::RenderService::NewStub(
+      grpc::CreateChannel(server.address(), grpc::InsecureChannelCredentials()));
+  grpc::Status st = submit(plain.get(), "tls4", kSmallJob, &resp, "tls-token");
+  EXPECT_EQ(st.error_code(), StatusCode::UNAVAILABLE) << st.error_message();
+  EXPECT_EQ(health_status(server.channel()), "SERVING");
 }
 
 }  // namespace

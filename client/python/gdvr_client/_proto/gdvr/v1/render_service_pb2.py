@@ -14,7 +14,7 @@ _sym_db = _symbol_database.Default()
 from gdvr_client._proto.gdvr.v1 import job_pb2 as gdvr_dot_v1_dot_job__pb2
 
 
-DESCRIPTOR = _descriptor_pool.Default().AddSerializedFile(b'\n\x1cgdvr/v1/render_service.proto\x12\x07gdvr.v1\x1a\x11gdvr/v1/job.proto\"h\n\x10SubmitJobRequest\x12\x17\n\x0fidempotency_key\x18\x01 \x01(\t\x12\x1f\n\x03job\x18\x02 \x01(\x0b\x32\x10.gdvr.v1.JobSpecH\x00\x12\x12\n\x08job_json\x18\x03 \x01(\tH\x00\x42\x06\n\x04spec\"P\n\x11SubmitJobResponse\x12\x0e\n\x06job_id\x18\x01 \x01(\t\x12\x10\n\x08\x65xisting\x18\x02 \x01(\x08\x12\x19\n\x03job\x18\x03 \x01(\x0b\x32\x0c.gdvr.v1.Job\"\\\n\x08Progress\x12\x13\n\x0b\x66rames_done\x18\x01 \x01(\x05\x12\x14\n\x0c\x66rames_total\x18\x02 \x01(\x05\x12\x10\n\x08\x66raction\x18\x03 \x01(\x01\x12\x13\n\x0b\x65ta_seconds\x18\x04 \x01(\x01\"\xd4\x01\n\nFrameStats\x12\r\n\x05\x66rame\x18\x01 \x01(\x05\x12\x16\n\x0erender_seconds\x18\x02 \x01(\x01\x12\x1b\n\x13reconstruct_seconds\x18\x03 \x01(\x01\x12\x0b\n\x03spp\x18\x04 \x01(\x05\x12\x0f\n\x07samples\x18\x05 \x01(\x04\x12\x0c\n\x04rays\x18\x06 \x01(\x04\x12\x1a\n\x12samples_per_second\x18\x07 \x01(\x01\x12\x17\n\x0frays_per_second\x18\x08 \x01(\x01\x12\x10\n\x08left_out\x18\t \x03(\t\x12\x0f\n\x07rel_mse\x18\n \x01(\x01\"\xd1\x02\n\x03Job\x12\n\n\x02id\x18\x01 \x01(\t\x12 \n\x05state\x18\x02 \x01(\x0e\x32\x11.gdvr.v1.JobState\x12\x1e\n\x04spec\x18\x03 \x01(\x0b\x32\x10.gdvr.v1.JobSpec\x12\x17\n\x0fidempotency_key\x18\x04 \x01(\t\x12\x10\n\x08priority\x18\x05 \x01(\x05\x12\x0e\n\x06\x66rames\x18\x06 \x03(\x05\x12\x14\n\x0c\x66inal_frames\x18\x07 \x03(\x05\x12#\n\x08progress\x18\x08 \x01(\x0b\x32\x11.gdvr.v1.Progress\x12\x0e\n\x06reason\x18\t \x01(\t\x12\x17\n\x0f\x63reated_unix_ms\x18\n \x01(\x03\x12\x17\n\x0fstarted_unix_ms\x18\x0b \x01(\x03\x12\x18\n\x10\x66inished_unix_ms\x18\x0c \x01(\x03\x12\x12\n\noutput_dir\x18\r \x01(\t\x12\x16\n\x0equeue_position\x18\x0e \x01(\x05\"\x1f\n\rGetJobRequest\x12\x0e\n\x06job_id\x18\x01 \x01(\t\"[\n\x0fListJobsRequest\x12!\n\x06states\x18\x01 \x03(\x0e\x32\x11.gdvr.v1.JobState\x12\x11\n\tpage_size\x18\x02 \x01(\x05\x12\x12\n\npage_token\x18\x03 \x01(\t\"G\n\x10ListJobsResponse\x12\x1a\n\x04jobs\x18\x01 \x03(\x0b\x32\x0c.gdvr.v1.Job\x12\x17\n\x0fnext_page_token\x18\x02 \x01(\t\"\"\n\x10\x43\x61ncelJobRequest\x12\x0e\n\x06job_id\x18\x01 \x01(\t\"b\n\x0fWatchJobRequest\x12\x0e\n\x06job_id\x18\x01 \x01(\t\x12\x17\n\nfrom_frame\x18\x02 \x01(\x05H\x00\x88\x01\x01\x12\x17\n\x0finclude_raw_rgb\x18\x03 \x01(\x08\x42\r\n\x0b_from_frame\"#\n\tJobQueued\x12\x16\n\x0equeue_position\x18\x01 \x01(\x05\":\n\nJobStarted\x12\x14\n\x0c\x66rames_total\x18\x01 \x01(\x05\x12\x16\n\x0eskipped_frames\x18\x02 \x03(\x05\"4\n\rFrameRendered\x12#\n\x08progress\x18\x01 \x01(\x0b\x32\x11.gdvr.v1.Progress\"\xd2\x02\n\nFrameFinal\x12\r\n\x05\x66rame\x18\x01 \x01(\x05\x12,\n\x07payload\x18\x02 \x01(\x0e\x32\x1b.gdvr.v1.FrameFinal.Payload\x12\x0e\n\x06offset\x18\x03 \x01(\x04\x12\x12\n\ntotal_size\x18\x04 \x01(\x04\x12\x0c\n\x04\x64\x61ta\x18\x05 \x01(\x0c\x12\x0c\n\x04last\x18\x06 \x01(\x08\x12\r\n\x05width\x18\x07 \x01(\x05\x12\x0e\n\x06height\x18\x08 \x01(\x05\x12\"\n\x05stats\x18\t \x01(\x0b\x32\x13.gdvr.v1.FrameStats\x12#\n\x08progress\x18\n \x01(\x0b\x32\x11.gdvr.v1.Progress\x12\x11\n\tfile_name\x18\x0b \x01(\t\"L\n\x07Payload\x12\x17\n\x13PAYLOAD_UNSPECIFIED\x10\x00\x12\x0f\n\x0bPAYLOAD_EXR\x10\x01\x12\x17\n\x13PAYLOAD_RAW_RGB_F32\x10\x02\"3\n\x0cJobCompleted\x12#\n\x08progress\x18\x01 \x01(\x0b\x32\x11.gdvr.v1.Progress\")\n\tJobFailed\x12\x0e\n\x06reason\x18\x01 \x01(\t\x12\x0c\n\x04\x63ode\x18\x02 \x01(\t\"\x1e\n\x0cJobCancelled\x12\x0e\n\x06reason\x18\x01 \x01(\t\"\xcd\x02\n\x08JobEvent\x12\x0e\n\x06job_id\x18\x01 \x01(\t\x12$\n\x06queued\x18\x02 \x01(\x0b\x32\x12.gdvr.v1.JobQueuedH\x00\x12&\n\x07started\x18\x03 \x01(\x0b\x32\x13.gdvr.v1.JobStartedH\x00\x12\x30\n\x0e\x66rame_rendered\x18\x04 \x01(\x0b\x32\x16.gdvr.v1.FrameRenderedH\x00\x12*\n\x0b\x66rame_final\x18\x05 \x01(\x0b\x32\x13.gdvr.v1.FrameFinalH\x00\x12*\n\tcompleted\x18\x06 \x01(\x0b\x32\x15.gdvr.v1.JobCompletedH\x00\x12$\n\x06\x66\x61iled\x18\x07 \x01(\x0b\x32\x12.gdvr.v1.JobFailedH\x00\x12*\n\tcancelled\x18\x08 \x01(\x0b\x32\x15.gdvr.v1.JobCancelledH\x00\x42\x07\n\x05\x65vent\"B\n\x10UploadSceneChunk\x12\x12\n\nscene_file\x18\x01 \x01(\t\x12\x0c\n\x04path\x18\x02 \x01(\t\x12\x0c\n\x04\x64\x61ta\x18\x03 \x01(\x0c\"]\n\x13UploadSceneResponse\x12\x13\n\x0b\x62undle_hash\x18\x01 \x01(\t\x12\r\n\x05scene\x18\x02 \x01(\t\x12\x13\n\x0btotal_bytes\x18\x03 \x01(\x04\x12\r\n\x05\x66iles\x18\x04 \x01(\x05*\x9a\x01\n\x08JobState\x12\x19\n\x15JOB_STATE_UNSPECIFIED\x10\x00\x12\x14\n\x10JOB_STATE_QUEUED\x10\x01\x12\x15\n\x11JOB_STATE_RUNNING\x10\x02\x12\x17\n\x13JOB_STATE_COMPLETED\x10\x03\x12\x14\n\x10JOB_STATE_FAILED\x10\x04\x12\x17\n\x13JOB_STATE_CANCELLED\x10\x05\x32\xff\x02\n\rRenderService\x12\x42\n\tSubmitJob\x12\x19.gdvr.v1.SubmitJobRequest\x1a\x1a.gdvr.v1.SubmitJobResponse\x12\x39\n\x08WatchJob\x12\x18.gdvr.v1.WatchJobRequest\x1a\x11.gdvr.v1.JobEvent0\x01\x12.\n\x06GetJob\x12\x16.gdvr.v1.GetJobRequest\x1a\x0c.gdvr.v1.Job\x12?\n\x08ListJobs\x12\x18.gdvr.v1.ListJobsRequest\x1a\x19.gdvr.v1.ListJobsResponse\x12\x34\n\tCancelJob\x12\x19.gdvr.v1.CancelJobRequest\x1a\x0c.gdvr.v1.Job\x12H\n\x0bUploadScene\x12\x19.gdvr.v1.UploadSceneChunk\x1a\x1c.gdvr.v1.UploadSceneResponse(\x01\x42\x03\xf8\x01\x01\x62\x06proto3')
+DESCRIPTOR = _descriptor_pool.Default().AddSerializedFile(b'\n\x1cgdvr/v1/render_service.proto\x12\x07gdvr.v1\x1a\x11gdvr/v1/job.proto\"h\n\x10SubmitJobRequest\x12\x17\n\x0fidempotency_key\x18\x01 \x01(\t\x12\x1f\n\x03job\x18\x02 \x01(\x0b\x32\x10.gdvr.v1.JobSpecH\x00\x12\x12\n\x08job_json\x18\x03 \x01(\tH\x00\x42\x06\n\x04spec\"P\n\x11SubmitJobResponse\x12\x0e\n\x06job_id\x18\x01 \x01(\t\x12\x10\n\x08\x65xisting\x18\x02 \x01(\x08\x12\x19\n\x03job\x18\x03 \x01(\x0b\x32\x0c.gdvr.v1.Job\"\\\n\x08Progress\x12\x13\n\x0b\x66rames_done\x18\x01 \x01(\x05\x12\x14\n\x0c\x66rames_total\x18\x02 \x01(\x05\x12\x10\n\x08\x66raction\x18\x03 \x01(\x01\x12\x13\n\x0b\x65ta_seconds\x18\x04 \x01(\x01\"\xd4\x01\n\nFrameStats\x12\r\n\x05\x66rame\x18\x01 \x01(\x05\x12\x16\n\x0erender_seconds\x18\x02 \x01(\x01\x12\x1b\n\x13reconstruct_seconds\x18\x03 \x01(\x01\x12\x0b\n\x03spp\x18\x04 \x01(\x05\x12\x0f\n\x07samples\x18\x05 \x01(\x04\x12\x0c\n\x04rays\x18\x06 \x01(\x04\x12\x1a\n\x12samples_per_second\x18\x07 \x01(\x01\x12\x17\n\x0frays_per_second\x18\x08 \x01(\x01\x12\x10\n\x08left_out\x18\t \x03(\t\x12\x0f\n\x07rel_mse\x18\n \x01(\x01\"\xe5\x02\n\x03Job\x12\n\n\x02id\x18\x01 \x01(\t\x12 \n\x05state\x18\x02 \x01(\x0e\x32\x11.gdvr.v1.JobState\x12\x1e\n\x04spec\x18\x03 \x01(\x0b\x32\x10.gdvr.v1.JobSpec\x12\x17\n\x0fidempotency_key\x18\x04 \x01(\t\x12\x10\n\x08priority\x18\x05 \x01(\x05\x12\x0e\n\x06\x66rames\x18\x06 \x03(\x05\x12\x14\n\x0c\x66inal_frames\x18\x07 \x03(\x05\x12#\n\x08progress\x18\x08 \x01(\x0b\x32\x11.gdvr.v1.Progress\x12\x0e\n\x06reason\x18\t \x01(\t\x12\x17\n\x0f\x63reated_unix_ms\x18\n \x01(\x03\x12\x17\n\x0fstarted_unix_ms\x18\x0b \x01(\x03\x12\x18\n\x10\x66inished_unix_ms\x18\x0c \x01(\x03\x12\x12\n\noutput_dir\x18\r \x01(\t\x12\x16\n\x0equeue_position\x18\x0e \x01(\x05\x12\x12\n\nvideo_file\x18\x0f \x01(\t\"\x1f\n\rGetJobRequest\x12\x0e\n\x06job_id\x18\x01 \x01(\t\"[\n\x0fListJobsRequest\x12!\n\x06states\x18\x01 \x03(\x0e\x32\x11.gdvr.v1.JobState\x12\x11\n\tpage_size\x18\x02 \x01(\x05\x12\x12\n\npage_token\x18\x03 \x01(\t\"G\n\x10ListJobsResponse\x12\x1a\n\x04jobs\x18\x01 \x03(\x0b\x32\x0c.gdvr.v1.Job\x12\x17\n\x0fnext_page_token\x18\x02 \x01(\t\"\"\n\x10\x43\x61ncelJobRequest\x12\x0e\n\x06job_id\x18\x01 \x01(\t\"b\n\x0fWatchJobRequest\x12\x0e\n\x06job_id\x18\x01 \x01(\t\x12\x17\n\nfrom_frame\x18\x02 \x01(\x05H\x00\x88\x01\x01\x12\x17\n\x0finclude_raw_rgb\x18\x03 \x01(\x08\x42\r\n\x0b_from_frame\"#\n\tJobQueued\x12\x16\n\x0equeue_position\x18\x01 \x01(\x05\":\n\nJobStarted\x12\x14\n\x0c\x66rames_total\x18\x01 \x01(\x05\x12\x16\n\x0eskipped_frames\x18\x02 \x03(\x05\"4\n\rFrameRendered\x12#\n\x08progress\x18\x01 \x01(\x0b\x32\x11.gdvr.v1.Progress\"\xe9\x02\n\nFrameFinal\x12\r\n\x05\x66rame\x18\x01 \x01(\x05\x12,\n\x07payload\x18\x02 \x01(\x0e\x32\x1b.gdvr.v1.FrameFinal.Payload\x12\x0e\n\x06offset\x18\x03 \x01(\x04\x12\x12\n\ntotal_size\x18\x04 \x01(\x04\x12\x0c\n\x04\x64\x61ta\x18\x05 \x01(\x0c\x12\x0c\n\x04last\x18\x06 \x01(\x08\x12\r\n\x05width\x18\x07 \x01(\x05\x12\x0e\n\x06height\x18\x08 \x01(\x05\x12\"\n\x05stats\x18\t \x01(\x0b\x32\x13.gdvr.v1.FrameStats\x12#\n\x08progress\x18\n \x01(\x0b\x32\x11.gdvr.v1.Progress\x12\x11\n\tfile_name\x18\x0b \x01(\t\x12\x15\n\rfinal_unix_us\x18\x0c \x01(\x03\"L\n\x07Payload\x12\x17\n\x13PAYLOAD_UNSPECIFIED\x10\x00\x12\x0f\n\x0bPAYLOAD_EXR\x10\x01\x12\x17\n\x13PAYLOAD_RAW_RGB_F32\x10\x02\"3\n\x0cJobCompleted\x12#\n\x08progress\x18\x01 \x01(\x0b\x32\x11.gdvr.v1.Progress\")\n\tJobFailed\x12\x0e\n\x06reason\x18\x01 \x01(\t\x12\x0c\n\x04\x63ode\x18\x02 \x01(\t\"\x1e\n\x0cJobCancelled\x12\x0e\n\x06reason\x18\x01 \x01(\t\"\xcd\x02\n\x08JobEvent\x12\x0e\n\x06job_id\x18\x01 \x01(\t\x12$\n\x06queued\x18\x02 \x01(\x0b\x32\x12.gdvr.v1.JobQueuedH\x00\x12&\n\x07started\x18\x03 \x01(\x0b\x32\x13.gdvr.v1.JobStartedH\x00\x12\x30\n\x0e\x66rame_rendered\x18\x04 \x01(\x0b\x32\x16.gdvr.v1.FrameRenderedH\x00\x12*\n\x0b\x66rame_final\x18\x05 \x01(\x0b\x32\x13.gdvr.v1.FrameFinalH\x00\x12*\n\tcompleted\x18\x06 \x01(\x0b\x32\x15.gdvr.v1.JobCompletedH\x00\x12$\n\x06\x66\x61iled\x18\x07 \x01(\x0b\x32\x12.gdvr.v1.JobFailedH\x00\x12*\n\tcancelled\x18\x08 \x01(\x0b\x32\x15.gdvr.v1.JobCancelledH\x00\x42\x07\n\x05\x65vent\"B\n\x10UploadSceneChunk\x12\x12\n\nscene_file\x18\x01 \x01(\t\x12\x0c\n\x04path\x18\x02 \x01(\t\x12\x0c\n\x04\x64\x61ta\x18\x03 \x01(\x0c\"]\n\x13UploadSceneResponse\x12\x13\n\x0b\x62undle_hash\x18\x01 \x01(\t\x12\r\n\x05scene\x18\x02 \x01(\t\x12\x13\n\x0btotal_bytes\x18\x03 \x01(\x04\x12\r\n\x05\x66iles\x18\x04 \x01(\x05\"M\n\x15\x46\x65tchArtifactsRequest\x12\x0e\n\x06job_id\x18\x01 \x01(\t\x12$\n\x05kinds\x18\x02 \x03(\x0e\x32\x15.gdvr.v1.ArtifactKind\"\x87\x01\n\rArtifactChunk\x12\x11\n\tfile_name\x18\x01 \x01(\t\x12#\n\x04kind\x18\x02 \x01(\x0e\x32\x15.gdvr.v1.ArtifactKind\x12\x0e\n\x06offset\x18\x03 \x01(\x04\x12\x12\n\ntotal_size\x18\x04 \x01(\x04\x12\x0c\n\x04\x64\x61ta\x18\x05 \x01(\x0c\x12\x0c\n\x04last\x18\x06 \x01(\x08*\x9a\x01\n\x08JobState\x12\x19\n\x15JOB_STATE_UNSPECIFIED\x10\x00\x12\x14\n\x10JOB_STATE_QUEUED\x10\x01\x12\x15\n\x11JOB_STATE_RUNNING\x10\x02\x12\x17\n\x13JOB_STATE_COMPLETED\x10\x03\x12\x14\n\x10JOB_STATE_FAILED\x10\x04\x12\x17\n\x13JOB_STATE_CANCELLED\x10\x05*\x93\x01\n\x0c\x41rtifactKind\x12\x1d\n\x19\x41RTIFACT_KIND_UNSPECIFIED\x10\x00\x12\x17\n\x13\x41RTIFACT_KIND_FRAME\x10\x01\x12\x19\n\x15\x41RTIFACT_KIND_PREVIEW\x10\x02\x12\x17\n\x13\x41RTIFACT_KIND_VIDEO\x10\x03\x12\x17\n\x13\x41RTIFACT_KIND_STATS\x10\x04\x32\xcb\x03\n\rRenderService\x12\x42\n\tSubmitJob\x12\x19.gdvr.v1.SubmitJobRequest\x1a\x1a.gdvr.v1.SubmitJobResponse\x12\x39\n\x08WatchJob\x12\x18.gdvr.v1.WatchJobRequest\x1a\x11.gdvr.v1.JobEvent0\x01\x12.\n\x06GetJob\x12\x16.gdvr.v1.GetJobRequest\x1a\x0c.gdvr.v1.Job\x12?\n\x08ListJobs\x12\x18.gdvr.v1.ListJobsRequest\x1a\x19.gdvr.v1.ListJobsResponse\x12\x34\n\tCancelJob\x12\x19.gdvr.v1.CancelJobRequest\x1a\x0c.gdvr.v1.Job\x12H\n\x0bUploadScene\x12\x19.gdvr.v1.UploadSceneChunk\x1a\x1c.gdvr.v1.UploadSceneResponse(\x01\x12J\n\x0e\x46\x65tchArtifacts\x12\x1e.gdvr.v1.FetchArtifactsRequest\x1a\x16.gdvr.v1.ArtifactChunk0\x01\x42\x03\xf8\x01\x01\x62\x06proto3')
 
 _builder.BuildMessageAndEnumDescriptors(DESCRIPTOR, globals())
 _builder.BuildTopDescriptorsAndMessages(DESCRIPTOR, 'gdvr.v1.render_service_pb2', globals())
@@ -22,8 +22,10 @@ if _descriptor._USE_C_DESCRIPTORS == False:
 
   DESCRIPTOR._options = None
   DESCRIPTOR._serialized_options = b'\370\001\001'
-  _JOBSTATE._serialized_start=2352
-  _JOBSTATE._serialized_end=2506
+  _JOBSTATE._serialized_start=2612
+  _JOBSTATE._serialized_end=2766
+  _ARTIFACTKIND._serialized_start=2769
+  _ARTIFACTKIND._serialized_end=2916
   _SUBMITJOBREQUEST._serialized_start=60
   _SUBMITJOBREQUEST._serialized_end=164
   _SUBMITJOBRESPONSE._serialized_start=166
@@ -33,39 +35,43 @@ if _descriptor._USE_C_DESCRIPTORS == False:
   _FRAMESTATS._serialized_start=343
   _FRAMESTATS._serialized_end=555
   _JOB._serialized_start=558
-  _JOB._serialized_end=895
-  _GETJOBREQUEST._serialized_start=897
-  _GETJOBREQUEST._serialized_end=928
-  _LISTJOBSREQUEST._serialized_start=930
-  _LISTJOBSREQUEST._serialized_end=1021
-  _LISTJOBSRESPONSE._serialized_start=1023
-  _LISTJOBSRESPONSE._serialized_end=1094
-  _CANCELJOBREQUEST._serialized_start=1096
-  _CANCELJOBREQUEST._serialized_end=1130
-  _WATCHJOBREQUEST._serialized_start=1132
-  _WATCHJOBREQUEST._serialized_end=1230
-  _JOBQUEUED._serialized_start=1232
-  _JOBQUEUED._serialized_end=1267
-  _JOBSTARTED._serialized_start=1269
-  _JOBSTARTED._serialized_end=1327
-  _FRAMERENDERED._serialized_start=1329
-  _FRAMERENDERED._serialized_end=1381
-  _FRAMEFINAL._serialized_start=1384
-  _FRAMEFINAL._serialized_end=1722
-  _FRAMEFINAL_PAYLOAD._serialized_start=1646
-  _FRAMEFINAL_PAYLOAD._serialized_end=1722
-  _JOBCOMPLETED._serialized_start=1724
-  _JOBCOMPLETED._serialized_end=1775
-  _JOBFAILED._serialized_start=1777
-  _JOBFAILED._serialized_end=1818
-  _JOBCANCELLED._serialized_start=1820
-  _JOBCANCELLED._serialized_end=1850
-  _JOBEVENT._serialized_start=1853
-  _JOBEVENT._serialized_end=2186
-  _UPLOADSCENECHUNK._serialized_start=2188
-  _UPLOADSCENECHUNK._serialized_end=2254
-  _UPLOADSCENERESPONSE._serialized_start=2256
-  _UPLOADSCENERESPONSE._serialized_end=2349
-  _RENDERSERVICE._serialized_start=2509
-  _RENDERSERVICE._serialized_end=2892
+  _JOB._serialized_end=915
+  _GETJOBREQUEST._serialized_start=917
+  _GETJOBREQUEST._serialized_end=948
+  _LISTJOBSREQUEST._serialized_start=950
+  _LISTJOBSREQUEST._serialized_end=1041
+  _LISTJOBSRESPONSE._serialized_start=1043
+  _LISTJOBSRESPONSE._serialized_end=1114
+  _CANCELJOBREQUEST._serialized_start=1116
+  _CANCELJOBREQUEST._serialized_end=1150
+  _WATCHJOBREQUEST._serialized_start=1152
+  _WATCHJOBREQUEST._serialized_end=1250
+  _JOBQUEUED._serialized_start=1252
+  _JOBQUEUED._serialized_end=1287
+  _JOBSTARTED._serialized_start=1289
+  _JOBSTARTED._serialized_end=1347
+  _FRAMERENDERED._serialized_start=1349
+  _FRAMERENDERED._serialized_end=1401
+  _FRAMEFINAL._serialized_start=1404
+  _FRAMEFINAL._serialized_end=1765
+  _FRAMEFINAL_PAYLOAD._serialized_start=1689
+  _FRAMEFINAL_PAYLOAD._serialized_end=1765
+  _JOBCOMPLETED._serialized_start=1767
+  _JOBCOMPLETED._serialized_end=1818
+  _JOBFAILED._serialized_start=1820
+  _JOBFAILED._serialized_end=1861
+  _JOBCANCELLED._serialized_start=1863
+  _JOBCANCELLED._serialized_end=1893
+  _JOBEVENT._serialized_start=1896
+  _JOBEVENT._serialized_end=2229
+  _UPLOADSCENECHUNK._serialized_start=2231
+  _UPLOADSCENECHUNK._serialized_end=2297
+  _UPLOADSCENERESPONSE._serialized_start=2299
+  _UPLOADSCENERESPONSE._serialized_end=2392
+  _FETCHARTIFACTSREQUEST._serialized_start=2394
+  _FETCHARTIFACTSREQUEST._serialized_end=2471
+  _ARTIFACTCHUNK._serialized_start=2474
+  _ARTIFACTCHUNK._serialized_end=2609
+  _RENDERSERVICE._serialized_start=2919
+  _RENDERSERVICE._serialized_end=3378
 # @@protoc_insertion_point(module_scope)

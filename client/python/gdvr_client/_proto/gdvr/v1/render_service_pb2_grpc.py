@@ -44,6 +44,11 @@ class RenderServiceStub(object):
                 request_serializer=gdvr_dot_v1_dot_render__service__pb2.UploadSceneChunk.SerializeToString,
                 response_deserializer=gdvr_dot_v1_dot_render__service__pb2.UploadSceneResponse.FromString,
                 )
+        self.FetchArtifacts = channel.unary_stream(
+                '/gdvr.v1.RenderService/FetchArtifacts',
+                request_serializer=gdvr_dot_v1_dot_render__service__pb2.FetchArtifactsRequest.SerializeToString,
+                response_deserializer=gdvr_dot_v1_dot_render__service__pb2.ArtifactChunk.FromString,
+                )
 
 
 class RenderServiceServicer(object):
@@ -91,6 +96,15 @@ class RenderServiceServicer(object):
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def FetchArtifacts(self, request, context):
+        """Streams a job's output files (frames, previews, video, stats.json) in
+        chunks of at most 1 MiB, one file after another, for clients without
+        access to the server's output folder.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
 
 def add_RenderServiceServicer_to_server(servicer, server):
     rpc_method_handlers = {
@@ -123,6 +137,11 @@ def add_RenderServiceServicer_to_server(servicer, server):
                     servicer.UploadScene,
                     request_deserializer=gdvr_dot_v1_dot_render__service__pb2.UploadSceneChunk.FromString,
                     response_serializer=gdvr_dot_v1_dot_render__service__pb2.UploadSceneResponse.SerializeToString,
+            ),
+            'FetchArtifacts': grpc.unary_stream_rpc_method_handler(
+                    servicer.FetchArtifacts,
+                    request_deserializer=gdvr_dot_v1_dot_render__service__pb2.FetchArtifactsRequest.FromString,
+                    response_serializer=gdvr_dot_v1_dot_render__service__pb2.ArtifactChunk.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -233,5 +252,22 @@ class RenderService(object):
         return grpc.experimental.stream_unary(request_iterator, target, '/gdvr.v1.RenderService/UploadScene',
             gdvr_dot_v1_dot_render__service__pb2.UploadSceneChunk.SerializeToString,
             gdvr_dot_v1_dot_render__service__pb2.UploadSceneResponse.FromString,
+            options, channel_credentials,
+            insecure, call_credentials, compression, wait_for_ready, timeout, metadata)
+
+    @staticmethod
+    def FetchArtifacts(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_stream(request, target, '/gdvr.v1.RenderService/FetchArtifacts',
+            gdvr_dot_v1_dot_render__service__pb2.FetchArtifactsRequest.SerializeToString,
+            gdvr_dot_v1_dot_render__service__pb2.ArtifactChunk.FromString,
             options, channel_credentials,
             insecure, call_credentials, compression, wait_for_ready, timeout, metadata)
