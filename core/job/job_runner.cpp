@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <set>
 
+#include "core/gradient/gpt_integrator.h"
+#include "core/recon/reconstruct.h"
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
 #include "core/scene/scene_loader.h"
@@ -27,6 +29,8 @@ struct PreparedJob {
   Animation animation;  // the scene file's own animation, then the job's tracks
   std::vector<bool> animated_shapes;
   FrameRenderSettings render;
+  bool gpt = false;
+  GptSettings gpt_settings;
 };
 
 Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions& options) {
@@ -42,8 +46,8 @@ Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions
 }
 
 Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& options) {
-  if (job.integrator != "pt")
-    return unimplemented("job.integrator: '" + job.integrator + "' is not available yet (supported: pt)");
+  if (job.integrator != "pt" && job.integrator != "gpt")
+    return unimplemented("job.integrator: '" + job.integrator + "' is not available yet (supported: pt, gpt)");
   if (!(job.fps > 0) || !std::isfinite(job.fps)) return invalid_argument("job.fps must be a positive number");
   if (job.width < 0 || job.height < 0 || job.width > 16384 || job.height > 16384)
     return invalid_argument("job.width/job.height must be between 1 and 16384 (0 = the scene's)");
@@ -86,6 +90,17 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
   r.path.max_depth = d.max_depth;
   r.path.rr_depth = d.rr_depth;
   r.path.hide_emitters = d.hide_emitters;
+  if (job.integrator == "gpt") {
+    auto shift = parse_shift_mapping(job.shift);
+    if (!shift.ok()) return shift.status().with_context("job.");
+    auto method = parse_recon_method(job.reconstruction.method);
+    if (!method.ok()) return method.status().with_context("job.reconstruction.");
+    prepared.gpt = true;
+    prepared.gpt_settings = GptSettings::defaults_for(shift.value());
+    prepared.gpt_settings.recon.method = method.value();
+    prepared.gpt_settings.recon.alpha = job.reconstruction.alpha;
+    GDVR_RETURN_IF_ERROR(prepared.gpt_settings.validate().with_context("job: "));
+  }
   return prepared;
 }
 
@@ -134,26 +149,68 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
     FrameRenderControl control;
     control.cancel = cancel;
     control.on_progress = report;
-    auto result = render_frame_pt(scene, pj.render, uint32_t(frame), control);
-    if (!result.ok()) return result.status().with_context("frame " + std::to_string(frame) + ": ");
-    FrameRenderResult& r = result.value();
-
     FrameOutput out;
     out.frame = frame;
-    out.image.add("", {"R", "G", "B"}, std::move(r.color));
-    out.image.add("direct", {"R", "G", "B"}, std::move(r.direct));
-    out.image.add("variance", {"R", "G", "B"}, std::move(r.variance));
     FrameStats& st = out.stats;
     st.frame = frame;
-    st.render_seconds = r.seconds;
-    st.spp = r.spp;
-    st.samples = uint64_t(r.spp) * uint64_t(pj.render.width) * uint64_t(pj.render.height);
-    st.rays = r.rays;
-    st.samples_per_second = r.seconds > 0 ? double(st.samples) / r.seconds : 0;
-    st.rays_per_second = r.seconds > 0 ? double(st.rays) / r.seconds : 0;
-    if (r.invalid_samples > 0)
-      st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples dropped");
-    st.left_out.push_back("gradient sampling and reconstruction: integrator pt");
+    if (pj.gpt) {
+      auto result = render_frame_gpt(scene, pj.render, pj.gpt_settings, uint32_t(frame), control);
+      if (!result.ok()) return result.status().with_context("frame " + std::to_string(frame) + ": ");
+      GptFrameResult& r = result.value();
+      GradientFilmBuffers& b = r.buffers;
+      // Reconstruct the indirect part; light seen directly is added after the solve.
+      GradientFrame gf;
+      gf.buffer(Term::kPrimal) = b.primal;
+      gf.buffer(Term::kDx) = b.dx;
+      gf.buffer(Term::kDy) = b.dy;
+      gf.variance(Term::kPrimal) = b.primal_var;
+      gf.variance(Term::kDx) = b.dx_var;
+      gf.variance(Term::kDy) = b.dy_var;
+      auto recon = reconstruct_frame(gf, pj.gpt_settings.recon);
+      if (!recon.ok()) return recon.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+      Image final_image = std::move(recon->frames.front());
+      for (size_t k = 0; k < final_image.data().size(); ++k) final_image.data()[k] += b.direct.data()[k];
+      out.image.add("", {"R", "G", "B"}, std::move(final_image));
+      out.image.add("primal", {"R", "G", "B"}, std::move(b.primal));
+      out.image.add("dx", {"R", "G", "B"}, std::move(b.dx));
+      out.image.add("dy", {"R", "G", "B"}, std::move(b.dy));
+      out.image.add("direct", {"R", "G", "B"}, std::move(b.direct));
+      out.image.add("shift_failure_rate", {"Y"}, std::move(b.shift_failure_rate));
+      out.image.add("primal_var", {"R", "G", "B"}, std::move(b.primal_var));
+      out.image.add("dx_var", {"R", "G", "B"}, std::move(b.dx_var));
+      out.image.add("dy_var", {"R", "G", "B"}, std::move(b.dy_var));
+      st.render_seconds = r.seconds;
+      st.reconstruct_seconds = recon->stats.seconds;
+      st.spp = r.spp;
+      st.rays = r.rays;
+      if (r.invalid_samples > 0)
+        st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples or gradients dropped");
+      if (recon->stats.total_non_finite() > 0)
+        st.left_out.push_back(std::to_string(recon->stats.total_non_finite()) +
+                              " non-finite constraints dropped by the reconstruction");
+      bool glossy = false;
+      for (const Bsdf& bsdf : scene.scene().bsdfs)
+        glossy = glossy || bsdf.roughness() <= pj.gpt_settings.diffuse_roughness;
+      if (!glossy && pj.gpt_settings.shift != ShiftMapping::kReplay)
+        st.left_out.push_back("glossy shift machinery: no glossy or specular BSDF in the scene");
+      st.left_out.push_back("temporal gradients: integrator gpt (spatial only)");
+    } else {
+      auto result = render_frame_pt(scene, pj.render, uint32_t(frame), control);
+      if (!result.ok()) return result.status().with_context("frame " + std::to_string(frame) + ": ");
+      FrameRenderResult& r = result.value();
+      out.image.add("", {"R", "G", "B"}, std::move(r.color));
+      out.image.add("direct", {"R", "G", "B"}, std::move(r.direct));
+      out.image.add("variance", {"R", "G", "B"}, std::move(r.variance));
+      st.render_seconds = r.seconds;
+      st.spp = r.spp;
+      st.rays = r.rays;
+      if (r.invalid_samples > 0)
+        st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples dropped");
+      st.left_out.push_back("gradient sampling and reconstruction: integrator pt");
+    }
+    st.samples = uint64_t(st.spp) * uint64_t(pj.render.width) * uint64_t(pj.render.height);
+    st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;
+    st.rays_per_second = st.render_seconds > 0 ? double(st.rays) / st.render_seconds : 0;
     if (!scene.has_environment()) st.left_out.push_back("environment lookups: the scene has no environment");
 
     ++rendered_here;

@@ -1,0 +1,133 @@
+#include "core/gradient/base_path.h"
+
+#include "core/math/sampling.h"
+
+namespace gdvr {
+
+void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const Ray& camera_ray,
+                     Sampler& sampler, PathCounters& counters, PathRecord* record) {
+  const Scene& desc = scene.scene();
+  PathRecord& rec = *record;
+  rec.clear();
+  rec.camera_ray = camera_ray;
+  Rgb beta(1.0f);
+  float eta = 1.0f;
+  Ray ray = camera_ray;
+
+  ++counters.rays;
+  SurfaceInteraction si;
+  if (!scene.intersect(ray, &si)) {
+    if (!settings.hide_emitters) rec.direct = scene.eval_environment(ray.d);
+    if (!is_finite(rec.direct)) {
+      ++counters.invalid_samples;
+      rec.clear();
+      rec.invalid = true;
+    }
+    return;
+  }
+
+  for (int depth = 0;; ++depth) {
+    rec.v.emplace_back();
+    PathVertex& v = rec.v.back();
+    v.si = si;
+    v.beta = beta;
+    const Shape& shape = desc.shapes[size_t(si.shape)];
+    v.bsdf = shape.bsdf;
+    const Bsdf& bsdf = desc.bsdfs[size_t(shape.bsdf)];
+
+    // ---- Emission at x_k (the previous vertex's BSDF sample), MIS against emitter sampling ----
+    if (scene.emitter_of_shape(si.shape) >= 0) {
+      v.le = scene.eval_area_emitter(si);
+      if (depth == 0) {
+        v.w_emit = 1.0f;
+        if (!settings.hide_emitters) rec.direct = v.le;
+      } else if (!v.le.is_black()) {
+        const PathVertex& prev = rec.v[rec.v.size() - 2];
+        if (prev.bs.is_delta()) {
+          v.w_emit = 1.0f;
+        } else {
+          v.emitter_pdf = scene.pdf_emitter_direction(prev.si.p, si);
+          v.w_emit = mis_power(prev.bs.pdf, v.emitter_pdf);
+        }
+        v.emission = beta * v.le * v.w_emit;
+        rec.indirect += v.emission;
+      }
+    }
+    if (settings.max_depth >= 0 && depth + 1 >= settings.max_depth) break;
+    const Vec3f wo = si.wi;
+
+    // ---- Emitter sampling (skipped for purely specular BSDFs) ----
+    if (!bsdf.is_delta_only()) {
+      v.has_nee = true;
+      v.u_select = sampler.next_1d();
+      v.u_light = sampler.next_2d();
+      v.es = scene.sample_emitter_direction(si, v.u_select, v.u_light);
+      if (!v.es.weight.is_black()) {
+        Vec3f wl = si.sh_frame.to_local(v.es.d);
+        BsdfEval be = bsdf_eval_pdf(bsdf, si.uv, wo, wl);
+        v.nee_f = be.value;
+        v.w_nee = v.es.delta ? 1.0f : mis_power(v.es.pdf, be.pdf);
+        if (!v.nee_f.is_black()) {
+          Ray shadow = si.spawn_ray(v.es.d);
+          shadow.tmax = std::isinf(v.es.dist) ? kInfinity : v.es.dist * (1.0f - kShadowEpsilon);
+          ++counters.rays;
+          v.nee_visible = !scene.occluded(shadow);
+          if (v.nee_visible) {
+            v.nee = beta * v.nee_f * v.es.weight * v.w_nee;
+            rec.indirect += v.nee;
+          }
+        }
+      }
+    }
+
+    // ---- BSDF sampling ----
+    v.u_lobe = sampler.next_1d();
+    v.u_dir = sampler.next_2d();
+    if (!bsdf_sample(bsdf, si.uv, wo, v.u_lobe, v.u_dir, &v.bs)) break;
+    if (v.bs.weight.is_black() || !is_finite(v.bs.weight)) break;
+    beta *= v.bs.weight;
+    eta *= v.bs.eta;
+    const Vec3f d = si.sh_frame.to_world(v.bs.wi);
+    ray = si.spawn_ray(d);
+
+    // ---- Russian roulette (Mitsuba's rule, counted after the bounce) ----
+    float throughput_max = max_component(beta);
+    if (!(throughput_max > 0)) break;
+    if (depth + 1 >= settings.rr_depth) {
+      float q = std::min(throughput_max * eta * eta, 0.95f);
+      if (sampler.next_1d() >= q) {
+        v.next = PathNext::kKilled;
+        v.rr_q = q;
+        break;
+      }
+      v.rr_q = q;
+      beta *= 1.0f / q;
+    }
+
+    ++counters.rays;
+    SurfaceInteraction next;
+    if (!scene.intersect(ray, &next)) {
+      // The PathVertex reference is still valid: nothing was appended since.
+      v.next = PathNext::kEscaped;
+      v.escape_dir = d;
+      v.escape_le = scene.eval_environment(d);
+      if (!v.escape_le.is_black()) {
+        v.escape_pdf = v.bs.is_delta() ? 0.0f : scene.pdf_environment_direction(d);
+        v.w_escape = v.bs.is_delta() ? 1.0f : mis_power(v.bs.pdf, v.escape_pdf);
+        v.escape = beta * v.escape_le * v.w_escape;
+        rec.indirect += v.escape;
+      }
+      break;
+    }
+    v.next = PathNext::kSurface;
+    si = next;
+  }
+
+  if (!is_finite(rec.indirect) || !is_finite(rec.direct)) {
+    ++counters.invalid_samples;
+    rec.clear();
+    rec.invalid = true;
+  }
+}
+
+}  // namespace gdvr

@@ -1,0 +1,70 @@
+#include "core/gradient/gpt_integrator.h"
+
+#include <chrono>
+
+#include "core/gradient/gradient_tracer.h"
+#include "core/render/perspective_camera.h"
+#include "core/render/tile_scheduler.h"
+
+namespace gdvr {
+
+Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRenderSettings& settings,
+                                          const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control) {
+  const int w = settings.width, h = settings.height;
+  if (w <= 0 || h <= 0) return invalid_argument("render resolution must be positive");
+  if (settings.spp <= 0) return invalid_argument("spp must be positive");
+  GDVR_RETURN_IF_ERROR(gpt.validate());
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+
+  PerspectiveCamera camera(scene.scene().camera, w, h);
+  GradientFilm film(w, h);
+  std::atomic<uint64_t> rays{0}, invalid{0}, shifts{0}, failures{0};
+  int spp_done = 0;
+  const bool timed = settings.time_budget_s > 0;
+  while (true) {
+    const int first = spp_done, count = settings.spp;
+    const double pass_start = elapsed();
+    TileRunOptions opts;
+    opts.threads = settings.threads;
+    opts.tile_size = settings.tile_size;
+    opts.cancel = control.cancel;
+    if (control.on_progress) {
+      opts.on_progress = [&](double f) {
+        control.on_progress(timed ? std::min(1.0, elapsed() / settings.time_budget_s) : f);
+      };
+    }
+    Status st = run_tiles(w, h, opts, [&](const Tile& tile) {
+      GradientTracer tracer(scene, camera, w, h, settings.path, gpt, settings.seed, frame);
+      GradientSample gs;
+      uint64_t tile_shifts = 0, tile_failures = 0;
+      for (int y = tile.y0; y < tile.y1; ++y)
+        for (int x = tile.x0; x < tile.x1; ++x)
+          for (int s = first; s < first + count; ++s) {
+            tracer.sample(x, y, uint32_t(s), &gs);
+            film.add(x, y, uint32_t(s), gs);
+            tile_shifts += uint64_t(gs.shifts);
+            tile_failures += uint64_t(gs.failures);
+          }
+      rays += tracer.counters().rays;
+      invalid += tracer.counters().invalid_samples;
+      shifts += tile_shifts;
+      failures += tile_failures;
+    });
+    if (!st.ok()) return st;
+    spp_done += count;
+    const double last_pass_seconds = elapsed() - pass_start;
+    if (!timed || elapsed() + last_pass_seconds > settings.time_budget_s) break;
+  }
+
+  GptFrameResult result;
+  result.buffers = film.resolve(spp_done);
+  result.spp = spp_done;
+  result.rays = rays;
+  result.invalid_samples = invalid;
+  result.shift_failure_rate = shifts > 0 ? double(failures) / double(shifts) : 0.0;
+  result.seconds = elapsed();
+  return result;
+}
+
+}  // namespace gdvr

@@ -1,0 +1,25 @@
+// The frame integrator of G-PT, analogous to render_frame_pt: tiles on a TBB
+// arena, spp or wall-time budget in passes, progress, cancel (checked per
+// tile). Produces the gradient film's named buffers; reconstruction is a
+// separate pure function (core/recon).
+#pragma once
+
+#include "core/gradient/gpt_settings.h"
+#include "core/gradient/gradient_film.h"
+#include "core/render/pt_integrator.h"
+
+namespace gdvr {
+
+struct GptFrameResult {
+  GradientFilmBuffers buffers;
+  int spp = 0;
+  uint64_t rays = 0;
+  uint64_t invalid_samples = 0;  // non-finite base paths or gradients dropped
+  double shift_failure_rate = 0; // over all attempted offsets
+  double seconds = 0;
+};
+
+Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRenderSettings& settings,
+                                          const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control);
+
+}  // namespace gdvr

@@ -1,0 +1,44 @@
+// Options of the spatial gradient-domain path tracer (Kettunen et al. 2015,
+// REFERENCE.md §2, §3): which shift mapping builds the offsets, whether the
+// offsets are built from the cached base path only with probability q
+// (§3.3), how vertices are classified, and how the frame is reconstructed.
+// Validated once before a frame; printable for logs.
+#pragma once
+
+#include <string>
+
+#include "core/recon/recon_settings.h"
+#include "core/util/status.h"
+
+namespace gdvr {
+
+enum class ShiftMapping {
+  kReplay,     // random replay in primary sample space (§3.2): the test oracle
+  kReconnect,  // reconnection with half-vector copy (§3.1): the G-PT default
+  kHybrid,     // replay until the first diffuse-diffuse pair, then reconnect
+};
+
+const char* shift_mapping_name(ShiftMapping m);
+Expected<ShiftMapping> parse_shift_mapping(const std::string& name);
+
+struct GptSettings {
+  ShiftMapping shift = ShiftMapping::kReconnect;
+  // Cached-path shifting with Russian roulette (§3.3): build the offsets with
+  // probability q = max(min(1, lum f(x)), q_min) and divide by q.
+  bool cached_rr = true;
+  float cached_rr_min_q = 0.1f;
+  // A vertex whose BSDF roughness exceeds this is "diffuse" (reconnectable);
+  // otherwise glossy/specular (half-vector copy). 0.001 in the G-PT release.
+  float diffuse_roughness = 0.001f;
+  // Tiny epsilon in the MIS denominator w = 1 / (1 + r + eps) (1e-14 in the release).
+  double mis_epsilon = 1e-14;
+  // How the job turns the sampled buffers into the final image.
+  ReconSettings recon;
+
+  // The defaults per shift: cached RR is on for reconnect (and hybrid), off for replay.
+  static GptSettings defaults_for(ShiftMapping shift);
+  Status validate() const;
+  std::string to_string() const;
+};
+
+}  // namespace gdvr

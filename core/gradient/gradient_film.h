@@ -1,0 +1,67 @@
+// Per-pixel accumulators of G-PT and the named buffers made from them
+// (STYLE.md: named buffers, not magic indices).
+//
+// Every base pixel owns the gradient estimates of its four offsets, so tiles
+// never write to a neighbour's pixel and the result does not depend on thread
+// count or tile order: dx(p) = right(p) + left(p + e_x), dy(p) = down(p) +
+// up(p + e_y), each side being one MIS-weighted generation of the pair
+// (Kettunen et al. 2015, Eq. 6). The primal is the base path's plain estimate
+// (docs/gpt.md explains the choice). Sums are split by sample-index parity
+// into two half buffers, whose difference gives per-pixel variances.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/math/vec.h"
+
+namespace gdvr {
+
+enum class OffsetDir : int { kRight = 0, kLeft, kDown, kUp };
+constexpr int kOffsetCount = 4;
+constexpr std::array<int, kOffsetCount> kOffsetDx = {1, -1, 0, 0};
+constexpr std::array<int, kOffsetCount> kOffsetDy = {0, 0, 1, -1};
+
+// One sample's contribution to its base pixel.
+struct GradientSample {
+  Rgb primal;                               // indirect part of the base path (direct excluded)
+  Rgb direct;                               // emitters seen directly from the camera
+  std::array<Rgb, kOffsetCount> gradient;   // towards I(neighbour) - I(p) for right/down, I(p) - I(neighbour) for left/up
+  int shifts = 0, failures = 0;             // offsets attempted and failed
+};
+
+struct GradientFilmBuffers {
+  Image primal, dx, dy, direct;             // means, RGB
+  Image primal_var, dx_var, dy_var;         // variance of the means, RGB, from the half buffers
+  Image shift_failure_rate;                 // one channel: failed / attempted offsets
+};
+
+class GradientFilm {
+ public:
+  GradientFilm() = default;
+  GradientFilm(int width, int height) : width_(width), height_(height), pixels_(size_t(width) * height) {}
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+  // Not thread-safe per pixel: one tile owns the pixel.
+  void add(int x, int y, uint32_t sample_index, const GradientSample& s);
+  // Means over `spp` samples per pixel (sample indices 0..spp-1).
+  GradientFilmBuffers resolve(int spp) const;
+
+ private:
+  struct Sums {
+    double primal[3] = {0, 0, 0}, direct[3] = {0, 0, 0};
+    double grad[kOffsetCount][3] = {};
+    // Even sample indices only ("half A"); half B = total - A.
+    double primal_a[3] = {0, 0, 0};
+    double grad_a[kOffsetCount][3] = {};
+    uint32_t shifts = 0, failures = 0;
+  };
+  int width_ = 0, height_ = 0;
+  std::vector<Sums> pixels_;
+};
+
+}  // namespace gdvr

@@ -1,0 +1,66 @@
+#include "core/gradient/gradient_tracer.h"
+
+#include <algorithm>
+
+#include "core/gradient/base_path.h"
+#include "core/gradient/reconnection_shift.h"
+#include "core/gradient/replay_shift.h"
+
+namespace gdvr {
+
+GradientTracer::GradientTracer(const FrameScene& scene, const PerspectiveCamera& camera, int width, int height,
+                               const PathTracerSettings& path, const GptSettings& settings, uint64_t seed,
+                               uint32_t frame)
+    : scene_(scene), camera_(camera), width_(width), height_(height), path_(path), settings_(settings),
+      seed_(seed), frame_(frame) {
+  base_.v.reserve(64);
+}
+
+void GradientTracer::sample(int x, int y, uint32_t s, GradientSample* out) {
+  *out = GradientSample();
+  Sampler sampler(seed_, frame_, uint32_t(x), uint32_t(y), s);
+  const Vec2f jitter = sampler.next_2d();  // box filter, as render_frame_pt
+  const Ray ray = camera_.generate_ray({float(x) + jitter.x, float(y) + jitter.y});
+  const Sampler after_camera = sampler;
+  trace_base_path(scene_, path_, ray, sampler, counters_, &base_);
+  if (base_.invalid) return;
+  out->primal = base_.indirect;
+  out->direct = base_.direct;
+
+  // ---- Cached-path Russian roulette (§3.3): shift with probability q, divide by q ----
+  float inv_q = 1.0f;
+  if (settings_.cached_rr) {
+    const float q = std::max(std::min(1.0f, luminance(base_.indirect)), settings_.cached_rr_min_q);
+    if (q < 1.0f) {
+      if (sampler.next_1d() >= q) return;
+      inv_q = 1.0f / q;
+    }
+  }
+
+  // ---- Offsets into the four neighbours ----
+  for (int o = 0; o < kOffsetCount; ++o) {
+    const int nx = x + kOffsetDx[size_t(o)], ny = y + kOffsetDy[size_t(o)];
+    if (nx < 0 || ny < 0 || nx >= width_ || ny >= height_) continue;
+    const Ray offset_ray = camera_.generate_ray({float(nx) + jitter.x, float(ny) + jitter.y});
+    ShiftResult r;
+    switch (settings_.shift) {
+      case ShiftMapping::kReplay: r = replay_shift(scene_, path_, base_, offset_ray, after_camera, counters_); break;
+      case ShiftMapping::kReconnect: r = reconnection_shift(scene_, settings_, base_, offset_ray, counters_); break;
+      case ShiftMapping::kHybrid:
+        r = shift_from_cache(scene_, settings_, base_, offset_ray, /* replay_prefix = */ true, counters_);
+        break;
+    }
+    // Right/down estimate I(j) - I(p); left/up slots hold I(p) - I(j) (film convention).
+    const float sign = (o == int(OffsetDir::kRight) || o == int(OffsetDir::kDown)) ? 1.0f : -1.0f;
+    Rgb g = r.gradient * (sign * inv_q);
+    if (!is_finite(g)) {
+      ++counters_.invalid_samples;
+      g = Rgb(0.0f);
+    }
+    out->gradient[size_t(o)] = g;
+    ++out->shifts;
+    if (r.failed) ++out->failures;
+  }
+}
+
+}  // namespace gdvr

@@ -1,0 +1,39 @@
+// The per-thread G-PT tracer: one base path through pixel p and its offsets
+// into the four neighbours (same sub-pixel position shifted by one pixel),
+// with the shift mapping of the settings. Owns its scratch storage, so the
+// per-sample loop does not allocate once the path record has grown.
+#pragma once
+
+#include "core/gradient/gpt_settings.h"
+#include "core/gradient/gradient_film.h"
+#include "core/gradient/path_record.h"
+#include "core/render/path_tracer.h"
+#include "core/render/perspective_camera.h"
+
+namespace gdvr {
+
+class GradientTracer {
+ public:
+  GradientTracer(const FrameScene& scene, const PerspectiveCamera& camera, int width, int height,
+                 const PathTracerSettings& path, const GptSettings& settings, uint64_t seed, uint32_t frame);
+
+  // One sample of pixel (x, y) with sample index s: the base estimate, the
+  // four MIS-weighted gradient generations (divided by the cached-path RR
+  // probability) and the shift statistics.
+  void sample(int x, int y, uint32_t s, GradientSample* out);
+
+  const PathCounters& counters() const { return counters_; }
+
+ private:
+  const FrameScene& scene_;
+  const PerspectiveCamera& camera_;
+  const int width_, height_;
+  const PathTracerSettings& path_;
+  const GptSettings& settings_;
+  const uint64_t seed_;
+  const uint32_t frame_;
+  PathCounters counters_;
+  PathRecord base_;
+};
+
+}  // namespace gdvr

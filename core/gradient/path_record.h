@@ -1,0 +1,74 @@
+// The cached base path of cached-path shifting (REFERENCE.md §3.3): every
+// vertex with its sampling decisions, pdfs and the random numbers that made
+// them, plus the base path's MIS-weighted contribution per technique. Offsets
+// are built from this record alone (no second look at the sampler), and an
+// offset can write its own record so that the shift can be applied backwards
+// (the invertibility test).
+#pragma once
+
+#include <vector>
+
+#include "core/bsdf/bsdf.h"
+#include "core/render/frame_scene.h"
+
+namespace gdvr {
+
+// What follows vertex x_k on the path.
+enum class PathNext : uint8_t {
+  kEnd,      // no bounce: max_depth reached, delta-only sampling failed, zero weight
+  kKilled,   // bounced, then Russian roulette ended the path
+  kSurface,  // bounced and hit x_{k+1} (the next PathVertex)
+  kEscaped,  // bounced and left the scene (environment emission, then the path ends)
+};
+
+struct PathVertex {
+  SurfaceInteraction si;  // x_k (k >= 1; x_0 is the camera)
+  int bsdf = -1;          // scene.bsdfs index
+  Rgb beta;               // throughput arriving at x_k: f/p of the prefix, including RR divisions
+
+  // ---- Emission at x_k (technique: BSDF sampling at x_{k-1}); k = 1 is `direct` ----
+  Rgb le;                 // radiance emitted towards x_{k-1}
+  float emitter_pdf = 0;  // solid-angle pdf emitter sampling at x_{k-1} would give x_k
+  float w_emit = 0;       // base MIS weight (power heuristic against emitter sampling)
+  Rgb emission;           // beta * le * w_emit: the base contribution of this technique
+
+  // ---- Emitter sampling at x_k ----
+  bool has_nee = false;   // false for delta-only BSDFs and past max_depth
+  float u_select = 0;
+  Vec2f u_light;
+  EmitterSample es;
+  bool nee_visible = false;
+  Rgb nee_f;              // f(wo, wl) |cos| at x_k
+  float w_nee = 0;        // base MIS weight
+  Rgb nee;                // beta * nee_f * es.weight * w_nee (0 when occluded)
+
+  // ---- BSDF sampling at x_k ----
+  PathNext next = PathNext::kEnd;
+  float u_lobe = 0;
+  Vec2f u_dir;
+  BsdfSample bs;          // wi in x_k's shading frame; pdf as sampled (non-Dirac: solid angle)
+  float rr_q = 1.0f;      // survival probability applied after this bounce (1: no roulette)
+
+  // ---- Environment emission when next == kEscaped ----
+  Vec3f escape_dir;
+  Rgb escape_le;
+  float escape_pdf = 0;   // environment sampling pdf of escape_dir
+  float w_escape = 0;
+  Rgb escape;             // base contribution
+};
+
+struct PathRecord {
+  Ray camera_ray;
+  std::vector<PathVertex> v;  // v[0] = x_1, the first hit; empty if the camera ray escaped
+  Rgb direct;                 // emitters seen directly from the camera (kept out of the solve)
+  Rgb indirect;               // everything else: the part the gradients are about
+  bool invalid = false;       // non-finite radiance: the sample is dropped
+
+  void clear() {
+    v.clear();
+    direct = indirect = Rgb(0.0f);
+    invalid = false;
+  }
+};
+
+}  // namespace gdvr

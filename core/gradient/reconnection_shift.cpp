@@ -1,0 +1,340 @@
+#include "core/gradient/reconnection_shift.h"
+
+#include "core/gradient/half_vector_copy.h"
+#include "core/math/sampling.h"
+
+namespace gdvr {
+namespace {
+
+enum class OffsetState { kNotReconnected, kJustReconnected, kReconnected };
+
+// Samples exactly the Dirac lobe `lobe` at the offset vertex. The lobe is part
+// of the path, not the random number that chose it, so try the base's u_lobe
+// first and then both ends of the selection interval (lobe selection is a
+// threshold on u_lobe for every BSDF here).
+bool sample_dirac_lobe(const Bsdf& bsdf, const SurfaceInteraction& si, uint32_t lobe, float u_lobe,
+                       BsdfSample* out) {
+  for (float u : {u_lobe, 0.0f, 0.99999994f, 0.5f}) {
+    BsdfSample s;
+    if (bsdf_sample(bsdf, si.uv, si.wi, u, Vec2f(0.5f, 0.5f), &s) && s.lobe == lobe && !s.weight.is_black() &&
+        is_finite(s.weight) && s.pdf > 0) {
+      *out = s;
+      return true;
+    }
+  }
+  return false;
+}
+
+class CachedShift {
+ public:
+  CachedShift(const FrameScene& scene, const GptSettings& settings, const PathRecord& base, bool replay_prefix,
+              PathCounters& counters, ShiftTrace* trace)
+      : scene_(scene), desc_(scene.scene()), settings_(settings), base_(base), replay_prefix_(replay_prefix),
+        counters_(counters), trace_(trace) {}
+
+  ShiftResult run(const Ray& offset_ray);
+
+ private:
+  const Bsdf& bsdf_at(const SurfaceInteraction& si) const {
+    return desc_.bsdfs[size_t(desc_.shapes[size_t(si.shape)].bsdf)];
+  }
+  bool diffuse(const Bsdf& b) const { return b.roughness() > settings_.diffuse_roughness; }
+
+  // One technique of the pair: balance heuristic on the accumulated ratio.
+  void technique(Rgb c_b, Rgb c_o, double ratio) {
+    if (trace_) trace_->ratios.push_back(ratio);
+    double w = pair_mis_weight(ratio, settings_.mis_epsilon);
+    if (w == 0.0) return;
+    Rgb wc_o = w == 1.0 ? Rgb(0.0f) : c_o * float(w);
+    if (!is_finite(wc_o)) wc_o = Rgb(0.0f);
+    result_.offset_primal += wc_o;
+    result_.gradient += wc_o - c_b * float(w);
+  }
+  // Shift failure from base vertex i on (§2): every later technique becomes a
+  // finite difference (offset 0, weight 1). `with_nee`: include x_i's emitter sampling.
+  void fail_from(size_t i, bool with_nee) {
+    result_.failed = true;
+    const auto& v = base_.v;
+    for (size_t j = i; j < v.size(); ++j) {
+      if (j > i) technique(v[j].emission, Rgb(0.0f), 0.0);
+      if (v[j].has_nee && (j > i || with_nee)) technique(v[j].nee, Rgb(0.0f), 0.0);
+      if (v[j].next == PathNext::kEscaped) technique(v[j].escape, Rgb(0.0f), 0.0);
+    }
+  }
+  PathVertex* record(const SurfaceInteraction& si, const PathVertex& base_vertex) {
+    if (!trace_) return nullptr;
+    trace_->offset.v.push_back(base_vertex);
+    PathVertex& o = trace_->offset.v.back();
+    o.si = si;
+    o.bsdf = desc_.shapes[size_t(si.shape)].bsdf;
+    o.has_nee = base_vertex.has_nee && !bsdf_at(si).is_delta_only();
+    return &o;
+  }
+
+  const FrameScene& scene_;
+  const Scene& desc_;
+  const GptSettings& settings_;
+  const PathRecord& base_;
+  const bool replay_prefix_;
+  PathCounters& counters_;
+  ShiftTrace* trace_;
+  ShiftResult result_;
+};
+
+ShiftResult CachedShift::run(const Ray& offset_ray) {
+  const auto& verts = base_.v;
+  if (trace_) {
+    trace_->ratios.clear();
+    trace_->offset.clear();
+    trace_->offset.camera_ray = offset_ray;
+  }
+  if (verts.empty()) return result_;  // the base saw only the environment: nothing but `direct`
+
+  // ---- x'_1: the offset's camera ray (same sub-pixel position, Jacobian 1 on the film) ----
+  SurfaceInteraction so;
+  ++counters_.rays;
+  if (!scene_.intersect(offset_ray, &so)) {
+    fail_from(0, true);
+    return result_;
+  }
+  OffsetState state = OffsetState::kNotReconnected;
+  Rgb beta(1.0f);     // f(T x)|J| / p(x) of the offset prefix
+  double ratio = 1.0; // p(T x)|J| / p(x) of the prefix, per vertex in double (§8)
+  Vec3f wo_reconnected;  // kJustReconnected: the offset's incoming direction at the shared vertex (local)
+  PathVertex* rec = record(so, verts[0]);
+
+  for (size_t i = 0; i < verts.size(); ++i) {
+    const PathVertex& v = verts[i];
+    const Bsdf& bsdf_b = desc_.bsdfs[size_t(v.bsdf)];
+    const bool shared = state != OffsetState::kNotReconnected;
+    const Bsdf& bsdf_o = shared ? bsdf_b : bsdf_at(so);
+
+    // ---- Emitter sampling at x'_k with the base's light sample ----
+    if (v.has_nee) {
+      Rgb c_o;
+      double r = ratio;
+      if (state == OffsetState::kReconnected) {
+        if (v.nee_visible) c_o = beta * v.nee_f * v.es.weight * v.w_nee;
+      } else if (state == OffsetState::kJustReconnected) {
+        // Same point, same light sample, same shadow ray; only the incoming direction differs.
+        if (v.nee_visible && !v.es.weight.is_black()) {
+          BsdfEval be = bsdf_eval_pdf(bsdf_b, v.si.uv, wo_reconnected, v.si.sh_frame.to_local(v.es.d));
+          float w = v.es.delta ? 1.0f : mis_power(v.es.pdf, be.pdf);
+          c_o = beta * be.value * v.es.weight * w;
+        }
+      } else if (bsdf_o.is_delta_only()) {
+        r = 0.0;  // the offset has no emitter sampling here: only the base generates this pair
+      } else {
+        EmitterSample eo = scene_.sample_emitter_direction(so, v.u_select, v.u_light);
+        if (rec) rec->es = eo;
+        if (!(eo.pdf > 0) || !(v.es.pdf > 0)) {
+          r = 0.0;
+        } else if (!eo.weight.is_black()) {
+          BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, so.sh_frame.to_local(eo.d));
+          if (!be.value.is_black()) {
+            Ray shadow = so.spawn_ray(eo.d);
+            shadow.tmax = std::isinf(eo.dist) ? kInfinity : eo.dist * (1.0f - kShadowEpsilon);
+            ++counters_.rays;
+            if (!scene_.occluded(shadow)) {
+              float w = eo.delta ? 1.0f : mis_power(eo.pdf, be.pdf);
+              c_o = beta * be.value * eo.weight * w;
+            }
+          }
+        }
+      }
+      technique(v.nee, c_o, r);
+    }
+    if (v.next == PathNext::kEnd || v.next == PathNext::kKilled) break;
+
+    const bool escaped = v.next == PathNext::kEscaped;
+    const PathVertex* nv = escaped ? nullptr : &verts[i + 1];
+    const Rgb c_b_next = escaped ? v.escape : nv->emission;
+    const float inv_q = 1.0f / v.rr_q;  // the base's roulette decision applies to the offset (§8)
+
+    // ---- Reconnected: the rest of the base path, same f and pdfs ----
+    if (state == OffsetState::kReconnected) {
+      beta *= v.bs.weight * inv_q;
+      Rgb c_o = escaped ? beta * v.escape_le * v.w_escape : beta * nv->le * nv->w_emit;
+      technique(c_b_next, c_o, ratio);
+      if (rec && nv) rec = record(nv->si, *nv);
+      continue;
+    }
+    // ---- Just reconnected: re-evaluate the BSDF at x_k for the offset's incoming direction ----
+    if (state == OffsetState::kJustReconnected) {
+      BsdfEval be = bsdf_eval_pdf(bsdf_b, v.si.uv, wo_reconnected, v.bs.wi);
+      if (!(be.pdf > 0) || be.value.is_black()) {
+        fail_from(i, false);
+        return result_;
+      }
+      if (rec) rec->bs.pdf = be.pdf, rec->bs.weight = be.value / be.pdf;
+      beta *= be.value * (inv_q / v.bs.pdf);
+      ratio *= double(be.pdf) / double(v.bs.pdf);
+      Rgb c_o;
+      if (escaped && !v.escape_le.is_black()) c_o = beta * v.escape_le * mis_power(be.pdf, v.escape_pdf);
+      if (!escaped && !nv->le.is_black()) c_o = beta * nv->le * mis_power(be.pdf, nv->emitter_pdf);
+      technique(c_b_next, c_o, ratio);
+      state = OffsetState::kReconnected;
+      if (rec && nv) rec = record(nv->si, *nv);
+      continue;
+    }
+
+    // ---- Not reconnected: reconnect to x_{k+1} if x_k, x'_k and x_{k+1} are all diffuse ----
+    const bool diffuse_b = diffuse(bsdf_b), diffuse_o = diffuse(bsdf_o);
+    const bool diffuse_next = escaped || diffuse(desc_.bsdfs[size_t(nv->bsdf)]);
+    if (diffuse_b && diffuse_o && diffuse_next) {
+      Vec3f dir;
+      float jacobian = 1.0f;
+      Ray connect;
+      if (escaped) {
+        // A direction at infinity: copied, Jacobian 1; the offset must escape too.
+        dir = v.escape_dir;
+        connect = so.spawn_ray(dir);
+      } else {
+        Vec3f d = nv->si.p - so.p;
+        float dist2 = length_squared(d);
+        Vec3f d_base = nv->si.p - v.si.p;
+        float dist2_base = length_squared(d_base);
+        if (!(dist2 > 0) || !(dist2_base > 0)) {
+          fail_from(i, false);
+          return result_;
+        }
+        float dist = std::sqrt(dist2);
+        dir = d / dist;
+        // |J| = (cos θ'_y / cos θ_y) (d² / d'²) at the reconnection vertex y = x_{k+1} (§3.1).
+        float cos_o = std::abs(dot(nv->si.n, dir));
+        float cos_b = std::abs(dot(nv->si.n, d_base)) / std::sqrt(dist2_base);
+        if (!(cos_o > 1e-6f) || !(cos_b > 1e-6f)) {
+          fail_from(i, false);
+          return result_;
+        }
+        jacobian = (cos_o / cos_b) * (dist2_base / dist2);
+        connect = so.spawn_ray(dir);
+        connect.tmax = dist * (1.0f - kShadowEpsilon);
+      }
+      ++counters_.rays;
+      if (scene_.occluded(connect)) {
+        fail_from(i, false);
+        return result_;
+      }
+      Vec3f wi_o = so.sh_frame.to_local(dir);
+      BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, wi_o);
+      if (!(be.pdf > 0) || be.value.is_black() || !std::isfinite(jacobian)) {
+        fail_from(i, false);
+        return result_;
+      }
+      beta *= be.value * (jacobian * inv_q / v.bs.pdf);
+      ratio *= double(be.pdf) * double(jacobian) / double(v.bs.pdf);
+      if (rec) {
+        rec->bs = v.bs;
+        rec->bs.wi = wi_o, rec->bs.pdf = be.pdf, rec->bs.weight = be.value / be.pdf;
+        rec->escape_dir = dir;
+      }
+      Rgb c_o;
+      if (escaped) {
+        if (!v.escape_le.is_black()) c_o = beta * v.escape_le * mis_power(be.pdf, v.escape_pdf);
+        technique(c_b_next, c_o, ratio);
+        break;
+      }
+      // The shared vertex seen from x'_k: emission and its emitter-sampling pdf change.
+      SurfaceInteraction y = nv->si;
+      y.wi = y.sh_frame.to_local(-dir);
+      if (scene_.emitter_of_shape(y.shape) >= 0) {
+        Rgb le = scene_.eval_area_emitter(y);
+        if (!le.is_black()) c_o = beta * le * mis_power(be.pdf, scene_.pdf_emitter_direction(so.p, y));
+      }
+      technique(c_b_next, c_o, ratio);
+      state = OffsetState::kJustReconnected;
+      wo_reconnected = y.wi;
+      if (rec) rec = record(y, *nv);
+      continue;
+    }
+
+    // ---- Otherwise follow the base: replay (hybrid) or half-vector copy (reconnect) ----
+    Vec3f wi_o;
+    float pdf_o = 0;
+    bool delta_o = false;
+    if (replay_prefix_) {
+      // Replay: same random numbers; in path space the Jacobian is p_b/p_o, so the ratio stays 1.
+      BsdfSample s;
+      if (!bsdf_sample(bsdf_o, so.uv, so.wi, v.u_lobe, v.u_dir, &s) || s.weight.is_black() || !is_finite(s.weight)) {
+        fail_from(i, false);
+        return result_;
+      }
+      beta *= s.weight * inv_q;
+      wi_o = s.wi, pdf_o = s.pdf, delta_o = s.is_delta();
+      if (rec) rec->bs = s;
+    } else if (v.bs.is_delta()) {
+      // Dirac lobe: the offset takes the same lobe (the half vector is the normal; Jacobian 1).
+      BsdfSample s;
+      if (!sample_dirac_lobe(bsdf_o, so, v.bs.lobe, v.u_lobe, &s)) {
+        fail_from(i, false);
+        return result_;
+      }
+      beta *= s.weight * (s.pdf * inv_q / v.bs.pdf);
+      ratio *= double(s.pdf) / double(v.bs.pdf);
+      wi_o = s.wi, pdf_o = s.pdf, delta_o = true;
+      if (rec) rec->bs = s;
+    } else {
+      HalfVectorCopy hv;
+      if (!copy_half_vector(v.si.wi, v.bs.wi, v.bs.eta, so.wi, &hv)) {
+        fail_from(i, false);
+        return result_;
+      }
+      BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, hv.wi);
+      if (!(be.pdf > 0) || be.value.is_black()) {
+        fail_from(i, false);
+        return result_;
+      }
+      beta *= be.value * (hv.jacobian * inv_q / v.bs.pdf);
+      ratio *= double(be.pdf) * double(hv.jacobian) / double(v.bs.pdf);
+      wi_o = hv.wi, pdf_o = be.pdf;
+      if (rec) {
+        rec->bs = v.bs;
+        rec->bs.wi = hv.wi, rec->bs.pdf = be.pdf, rec->bs.weight = be.value / be.pdf;
+      }
+    }
+
+    const Vec3f d_o = so.sh_frame.to_world(wi_o);
+    if (rec) rec->escape_dir = d_o;
+    SurfaceInteraction sn;
+    ++counters_.rays;
+    const bool hit = scene_.intersect(so.spawn_ray(d_o), &sn);
+    if (hit == escaped) {  // surface against environment
+      fail_from(i, false);
+      return result_;
+    }
+    if (!hit) {
+      Rgb le = scene_.eval_environment(d_o), c_o;
+      if (!le.is_black())
+        c_o = beta * le * (delta_o ? 1.0f : mis_power(pdf_o, scene_.pdf_environment_direction(d_o)));
+      technique(c_b_next, c_o, ratio);
+      break;
+    }
+    // Invertibility (§2): the reverse shift, seeing x_k, x'_k and x'_{k+1} all
+    // diffuse, would reconnect where this one did not.
+    if (diffuse_b && diffuse_o && diffuse(bsdf_at(sn))) {
+      fail_from(i, false);
+      return result_;
+    }
+    Rgb c_o;
+    if (scene_.emitter_of_shape(sn.shape) >= 0) {
+      Rgb le = scene_.eval_area_emitter(sn);
+      if (!le.is_black())
+        c_o = beta * le * (delta_o ? 1.0f : mis_power(pdf_o, scene_.pdf_emitter_direction(so.p, sn)));
+    }
+    technique(c_b_next, c_o, ratio);
+    so = sn;
+    if (rec) rec = record(so, *nv);
+  }
+  return result_;
+}
+
+}  // namespace
+
+ShiftResult shift_from_cache(const FrameScene& scene, const GptSettings& settings, const PathRecord& base,
+                             const Ray& offset_ray, bool replay_prefix, PathCounters& counters, ShiftTrace* trace) {
+  CachedShift shift(scene, settings, base, replay_prefix, counters, trace);
+  return shift.run(offset_ray);
+}
+
+}  // namespace gdvr
