@@ -20,9 +20,10 @@ Pair reduce_pair(size_t n, Body body) {
   return tbb::parallel_deterministic_reduce(
       tbb::blocked_range<size_t>(0, n, kChunk), Pair{0.0, 0.0},
       [&](const tbb::blocked_range<size_t>& r, Pair acc) {
-        float a = 0, b = 0;  // per-chunk float sums, chunks summed in double
-        body(r.begin(), r.end(), &a, &b);
-        return Pair{acc.first + a, acc.second + b};
+        // Per-chunk float sums (kept in registers: the body returns them by
+        // value so the compiler can vectorise), chunks summed in double.
+        const std::pair<float, float> part = body(r.begin(), r.end());
+        return Pair{acc.first + part.first, acc.second + part.second};
       },
       [](Pair a, Pair b) { return Pair{a.first + b.first, a.second + b.second}; });
 }
@@ -42,19 +43,23 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
 
   // ---- r = b − A x, p = M r ----
   A.apply(x, q);
-  const Pair init = reduce_pair(n, [&](size_t i0, size_t i1, float* rz, float* bb) {
+  const Pair init = reduce_pair(n, [&](size_t i0, size_t i1) {
+    float rz = 0, bb = 0;
     for (size_t i = i0; i < i1; ++i) {
       r[i] = B[i] - q[i];
       p[i] = M[i] * r[i];
-      *rz += r[i] * p[i];
-      *bb += B[i] * B[i];
+      rz += r[i] * p[i];
+      bb += B[i] * B[i];
     }
+    return std::pair<float, float>{rz, bb};
   });
   double rz = init.first;
   // A zero right-hand side has the solution 0; measure against 1 then.
   const double b_norm2 = init.second > 0 ? init.second : 1.0;
-  const Pair rr0 = reduce_pair(n, [&](size_t i0, size_t i1, float* rr, float*) {
-    for (size_t i = i0; i < i1; ++i) *rr += r[i] * r[i];
+  const Pair rr0 = reduce_pair(n, [&](size_t i0, size_t i1) {
+    float rr = 0;
+    for (size_t i = i0; i < i1; ++i) rr += r[i] * r[i];
+    return std::pair<float, float>{rr, 0.0f};
   });
   double rr = rr0.first;
   const double tol2 = tolerance * tolerance * b_norm2;
@@ -65,13 +70,30 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
     // pq ≤ 0 only from round-off once converged (A is SPD): stop, don't divide.
     if (!(pq > 0) || !std::isfinite(pq)) break;
     const float step = float(rz / pq);
-    const Pair upd = reduce_pair(n, [&](size_t i0, size_t i1, float* rr_acc, float* rz_acc) {
-      for (size_t i = i0; i < i1; ++i) {
+    const Pair upd = reduce_pair(n, [&](size_t i0, size_t i1) {
+      // kLanes independent partial sums: float sums may not be reassociated,
+      // so a single accumulator would keep this hot loop scalar.
+      constexpr int kLanes = 8;
+      float rr_acc[kLanes] = {}, rz_acc[kLanes] = {};
+      size_t i = i0;
+      for (; i + kLanes <= i1; i += kLanes)
+        for (int j = 0; j < kLanes; ++j) {
+          x[i + j] += step * p[i + j];
+          const float ri = r[i + j] - step * q[i + j];
+          r[i + j] = ri;
+          rr_acc[j] += ri * ri;
+          rz_acc[j] += ri * ri * M[i + j];
+        }
+      for (; i < i1; ++i) {
         x[i] += step * p[i];
-        r[i] -= step * q[i];
-        *rr_acc += r[i] * r[i];
-        *rz_acc += r[i] * r[i] * M[i];
+        const float ri = r[i] - step * q[i];
+        r[i] = ri;
+        rr_acc[0] += ri * ri;
+        rz_acc[0] += ri * ri * M[i];
       }
+      float rr_sum = 0, rz_sum = 0;
+      for (int j = 0; j < kLanes; ++j) rr_sum += rr_acc[j], rz_sum += rz_acc[j];
+      return std::pair<float, float>{rr_sum, rz_sum};
     });
     ++res.iterations;
     rr = upd.first;

@@ -60,10 +60,20 @@ float apply_row(const RowCtx& r, int width, const float* p, float* q) {
     return p[0] * q[0];
   }
   q[0] = stencil<kTemporal>(r, 0, 0, 1, 0.0f);
+  // q never aliases the inputs; without this promise GCC gives up on the
+  // temporal stencil (more pointers than its runtime alias-check budget) and
+  // runs it scalar, 3x slower (measured).
+#pragma GCC ivdep
   for (int i = 1; i < W - 1; ++i) q[i] = stencil<kTemporal>(r, i, i - 1, i + 1, 1.0f);
   q[W - 1] = stencil<kTemporal>(r, W - 1, W - 2, W - 1, 1.0f);
+  // Eight partial sums so the reduction vectorises (no float reassociation).
+  float acc[8] = {};
+  int i = 0;
+  for (; i + 8 <= W; i += 8)
+    for (int j = 0; j < 8; ++j) acc[j] += p[i + j] * q[i + j];
+  for (; i < W; ++i) acc[0] += p[i] * q[i];
   float dot = 0;
-  for (int i = 0; i < W; ++i) dot += p[i] * q[i];
+  for (float a : acc) dot += a;
   return dot;
 }
 

@@ -30,7 +30,7 @@ struct ReconSettings {
 
   // ---- L2 (and the inner solves of L1) ----
   int l2_max_iterations = 200;
-  double l2_tolerance = 1e-4;  // relative residual ‖b − Ax‖ / ‖b‖
+  double l2_tolerance = 1e-3;  // relative residual ‖b − Ax‖ / ‖b‖ (≈ relative error of the low frequencies)
 
   // ---- L1 by IRLS: weights 1/(|r| + ε_k), ε_k = ε_0 · decay^(k−1) ----
   int l1_outer_iterations = 20;
