@@ -194,7 +194,9 @@ std::map<std::string, std::string> fetch(v1::RenderService::Stub* stub, const st
     EXPECT_LE(c.data().size(), size_t(1) << 20);
     EXPECT_EQ(c.offset(), files[c.file_name()].size());
     files[c.file_name()] += c.data();
-    if (c.last()) EXPECT_EQ(files[c.file_name()].size(), c.total_size());
+    if (c.last()) {
+      EXPECT_EQ(files[c.file_name()].size(), c.total_size());
+    }
   }
   grpc::Status st = reader->Finish();
   EXPECT_TRUE(st.ok()) << st.error_message();
