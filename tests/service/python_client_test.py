@@ -70,6 +70,9 @@ def main():
         check([f.frame for f in resumed] == [3], "frames(from_frame=3) resumes at 3")
         paths = c.fetch(job_id, os.path.join(tmp, "fetched"))
         check(len(paths) == 3, "fetch saves 3 frames")
+        paths = c.fetch(job_id, os.path.join(tmp, "fetched"), kinds=("previews", "video"))
+        check(sorted(os.path.basename(p) for p in paths) ==
+              ["preview_0001.png", "preview_0002.png", "preview_0003.png", "video.mp4"], "fetch previews and video")
 
         # Errors map to status codes with the field named.
         for job, code, word in [({"scene": "cbox/cbox-rgb.xml", "frames": "9-1"}, grpc.StatusCode.INVALID_ARGUMENT, "frames"),
@@ -100,8 +103,9 @@ def main():
         r = subprocess.run(cli + ["--token", "tok", "submit", "--scene", "cbox/cbox-rgb.xml", "--frames", "1-2",
                                   "--width", "32", "--height", "32", "--spp", "1", "--watch", "--out", out],
                            env=env, capture_output=True, text=True)
-        check(r.returncode == 0 and sorted(os.listdir(out)) == ["frame_0001.exr", "frame_0002.exr"],
-              f"gdvr submit --watch saves frames (rc {r.returncode}) {r.stderr[-300:]}")
+        check(r.returncode == 0 and sorted(os.listdir(out)) ==
+              ["frame_0001.exr", "frame_0002.exr", "preview_0001.png", "preview_0002.png", "stats.json", "video.mp4"],
+              f"gdvr submit --watch saves frames, previews, video (rc {r.returncode}) {r.stderr[-300:]}")
         r = subprocess.run(cli + ["--token", "tok", "watch", r.stdout.strip(), "--out", out], env=env,
                            capture_output=True, text=True)
         check(r.returncode == 0, "gdvr watch of a finished job resumes and exits 0")

@@ -24,6 +24,7 @@ def main(argv=None):
         sub.add_parser(name).add_argument("job_id")
     sub.add_parser("list").add_argument("--state", action="append", default=[])
     f = sub.add_parser("fetch"); f.add_argument("job_id"); f.add_argument("--out", required=True)
+    f.add_argument("--what", default="frames,previews,video,stats")
     a = ap.parse_args(argv)
     c = Client(a.server, a.token)
     try:
@@ -49,7 +50,7 @@ def main(argv=None):
         elif a.cmd == "cancel":
             c.cancel(a.job_id)
         elif a.cmd == "fetch":
-            for p in c.fetch(a.job_id, a.out):
+            for p in c.fetch(a.job_id, a.out, [k for k in a.what.split(",") if k]):
                 print(p)
     except JobFailed as e:
         print(f"gdvr-py: {e}", file=sys.stderr)

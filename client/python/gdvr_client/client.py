@@ -179,32 +179,34 @@ class Client:
                 attempts += 1
                 time.sleep(min(2.0, 0.2 * attempts))
 
-    def fetch(self, job_id: str, out_dir: str) -> list:
-        """Saves the frames final so far as EXR files; returns their paths."""
-        job = self.status(job_id)
+    ARTIFACT_KINDS = {"frames": 1, "previews": 2, "video": 3, "stats": 4}
+
+    def fetch(self, job_id: str, out_dir: str, kinds: Iterable[str] = ("frames",)) -> list:
+        """Saves the job's files as they are now (kinds: frames, previews,
+        video, stats; empty: all) into out_dir; returns their paths."""
+        req = pb.FetchArtifactsRequest(job_id=job_id, kinds=[self.ARTIFACT_KINDS[k] for k in kinds])
         os.makedirs(out_dir, exist_ok=True)
-        want, paths = set(job.final_frames), []
-        if not want:
-            return paths
-        for ev in self.watch(job_id, min(want), raw=False):
-            pass_through = ev.WhichOneof("event")
-            if pass_through != "frame_final":
-                if pass_through in ("completed", "failed", "cancelled"):
-                    break
-                continue
-            ff = ev.frame_final
-            if ff.offset == 0:
-                buf = bytearray()
-            buf.extend(ff.data)
-            if ff.last:
-                path = os.path.join(out_dir, ff.file_name)
-                with open(path + ".part", "wb") as fh:
-                    fh.write(buf)
-                os.replace(path + ".part", path)
-                paths.append(path)
-                want.discard(ff.frame)
-                if not want:
-                    break
+        paths, fh, name = [], None, None
+        try:
+            for c in self._stub.FetchArtifacts(req, metadata=self._md()):
+                if c.offset == 0:
+                    name = c.file_name
+                    if not name or "/" in name or name in (".", ".."):
+                        raise GdvrError(grpc.StatusCode.INTERNAL, f"refusing file name {name!r}")
+                    fh = open(os.path.join(out_dir, name + ".part"), "wb")
+                fh.write(c.data)
+                if c.last:
+                    fh.close()
+                    path = os.path.join(out_dir, name)
+                    os.replace(path + ".part", path)
+                    paths.append(path)
+                    fh = None
+        except grpc.RpcError as e:  # type: ignore[misc]
+            raise GdvrError(e.code(), e.details()) from None
+        finally:
+            if fh is not None:
+                fh.close()
+                os.remove(fh.name)
         return paths
 
     @staticmethod
