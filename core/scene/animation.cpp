@@ -165,6 +165,7 @@ double hermite(double p0, double m0, double p1, double m1, double u) {
 }  // namespace
 
 Transform evaluate_track(const Track& track, double time) {
+  if (track.curve) return track.curve->evaluate(time);
   const std::vector<Keyframe>& keys = track.keys;
   if (keys.empty()) return Transform();
   if (!(time > keys.front().time)) return keys.front().to_world;  // also catches NaN time

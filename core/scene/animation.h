@@ -4,6 +4,7 @@
 // rotation by quaternion slerp.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,10 +21,22 @@ struct Keyframe {
   Transform to_world;   // full transform at this key (from a matrix or a lookat)
 };
 
+// A transform computed from a richer animation model than whole-transform keys
+// (a glTF node graph: T/R/S channels on the node and every ancestor). Key
+// interpolation cannot reproduce such motion exactly, so a track may carry one.
+class TransformCurve {
+ public:
+  virtual ~TransformCurve() = default;
+  virtual Transform evaluate(double time) const = 0;
+};
+
 struct Track {
   std::string target;   // "sensor" or a shape/emitter id
   Interpolation interpolation = Interpolation::kLinear;
   std::vector<Keyframe> keys;  // sorted by time, at least one
+  // When set, evaluate_track returns curve->evaluate(time) and `keys` are only
+  // samples of it (at the source's own key times) for validation and tools.
+  std::shared_ptr<const TransformCurve> curve;
 };
 
 struct Animation {
