@@ -35,6 +35,7 @@ class FrameScene {
   Status update(const Scene& scene);
 
   const Scene& scene() const { return scene_; }
+  const Accelerator& accelerator() const { return *accel_; }
   bool has_environment() const { return environment_ >= 0; }
 
   bool intersect(const Ray& ray, SurfaceInteraction* si) const;

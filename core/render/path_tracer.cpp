@@ -19,6 +19,7 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
   for (int depth = 0;; ++depth) {
     SurfaceInteraction si;
     ++counters.rays;
+    if (counters.ray_log) counters.ray_log->push_back({ray, false});
     bool hit = scene.intersect(ray, &si);
 
     // ---- Emission seen along the ray, weighted against emitter sampling ----
@@ -58,6 +59,7 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
           Ray shadow = si.spawn_ray(es.d);
           shadow.tmax = std::isinf(es.dist) ? kInfinity : es.dist * (1.0f - kShadowEpsilon);
           ++counters.rays;
+          if (counters.ray_log) counters.ray_log->push_back({shadow, true});
           if (!scene.occluded(shadow)) {
             float w = es.delta ? 1.0f : mis_power(es.pdf, bsdf_pdf(bsdf, si.uv, wo, wi_local));
             result += throughput * f * es.weight * w;

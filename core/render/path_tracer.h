@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "core/math/rng.h"
 #include "core/render/frame_scene.h"
@@ -18,9 +19,17 @@ struct PathTracerSettings {
   bool hide_emitters = false;
 };
 
+// A ray as traced, for benchmarks that replay the path tracer's exact ray
+// distribution through bare ray casting (gdvr-bench).
+struct RecordedRay {
+  Ray ray;
+  bool shadow = false;  // any-hit query
+};
+
 struct PathCounters {
   uint64_t rays = 0;            // closest-hit and shadow rays
   uint64_t invalid_samples = 0; // non-finite radiance dropped (reported, never silent)
+  std::vector<RecordedRay>* ray_log = nullptr;  // benchmarks only; null in renders
 };
 
 struct PathSample {

@@ -151,7 +151,7 @@ namespace {
 TEST(JobSpecTest, DemoJobMatchesDemoScene) {
   std::string dir = std::string(GDVR_SOURCE_DIR) + "/scenes/demo/";
   std::ifstream in(dir + "demo_job.json");
-  if (!in) GTEST_SKIP() << "no demo job";
+  ASSERT_TRUE(in.good()) << "scenes/demo/demo_job.json is bundled and must exist";
   std::stringstream ss;
   ss << in.rdbuf();
   auto job = parse_job_json(ss.str(), "demo_job.json");
