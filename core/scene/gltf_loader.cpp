@@ -113,6 +113,8 @@ class GltfBuilder {
     GDVR_RETURN_IF_ERROR(instantiate_scene());
     GDVR_RETURN_IF_ERROR(build_tracks());
     if (!has_camera_) GDVR_RETURN_IF_ERROR(frame_default_camera());
+    if (out_.scene.emitters.empty())
+      warn("no lights and no emissive materials: the scene renders black unless lights are added to it");
     return std::move(out_);
   }
 
@@ -464,9 +466,11 @@ class GltfBuilder {
       return unsupported(where + ": primitive mode " + mode + " is not supported (only TRIANGLES)");
     }
     if (!prim.targets.empty()) return unsupported(where + ": morph targets are not supported");
-    for (const auto& attr : prim.attributes)
+    for (const auto& attr : prim.attributes) {
       if (attr.first.rfind("JOINTS_", 0) == 0 || attr.first.rfind("WEIGHTS_", 0) == 0)
         return unsupported(where + ": skinning attribute " + attr.first + " is not supported");
+      if (attr.first == "COLOR_0") warn(where + ": vertex colours (COLOR_0) are ignored");
+    }
 
     TriangleMesh mesh;
     auto attr = [&](const char* name) { auto it = prim.attributes.find(name); return it == prim.attributes.end() ? -1 : it->second; };

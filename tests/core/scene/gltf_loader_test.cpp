@@ -439,5 +439,38 @@ TEST(GltfLoaderTest, RendersThroughTheJobRunnerWithAnAddedLight) {
   EXPECT_GT(diff, 0.0);  // and different
 }
 
+// glTF's camera frame (+x right, +y up, looking down -z) survives the
+// conversion: an emissive triangle right of and above the view axis lands in
+// the image's top-right quadrant.
+TEST(GltfLoaderTest, CameraImageOrientationMatchesGltf) {
+  SyntheticGltf g;
+  g.doc["materials"] = {{{"emissiveFactor", {1, 1, 1}}}};
+  g.doc["meshes"][0]["primitives"][0]["material"] = 0;
+  g.doc["nodes"][0]["translation"] = {0.5, 0.5, 0};  // triangle spans x, y in [0.5, 1.5]
+  g.doc["cameras"] = {{{"type", "perspective"}, {"perspective", {{"yfov", 1.0}, {"znear", 0.01}}}}};
+  g.add_node({{"name", "cam"}, {"camera", 0}, {"translation", {0, 0, 3}}});
+  fs::path dir = temp_dir("orientation");
+  JobSpec job;
+  job.scene = g.write(dir);
+  job.width = job.height = 16;
+  job.spp = 4;
+  job.outputs.previews = false;
+  job.outputs.video_codec = "none";
+  JobRunOptions options;
+  options.threads = 2;
+  Image frame;
+  JobCallbacks callbacks;
+  callbacks.on_frame_final = [&](const FrameOutput& out) { frame = out.image.find("")->image; };
+  Status st = run_job(job, options, callbacks, nullptr);
+  ASSERT_TRUE(st.ok()) << st.to_string();
+  double quadrant[2][2] = {{0, 0}, {0, 0}};  // [top/bottom][left/right]
+  for (int y = 0; y < frame.height(); ++y)
+    for (int x = 0; x < frame.width(); ++x) quadrant[y < 8 ? 0 : 1][x < 8 ? 0 : 1] += frame.at(x, y, 0);
+  EXPECT_GT(quadrant[0][1], 1.0);
+  EXPECT_EQ(quadrant[0][0], 0.0);
+  EXPECT_EQ(quadrant[1][0], 0.0);
+  EXPECT_EQ(quadrant[1][1], 0.0);
+}
+
 }  // namespace
 }  // namespace gdvr
