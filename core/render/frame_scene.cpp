@@ -34,6 +34,13 @@ Rgb envmap_lookup(const Image& img, Vec2f uv) {
   return (at(x0, y0) * (1 - fx) + at(x1, y0) * fx) * (1 - fy) + (at(x0, y1) * (1 - fx) + at(x1, y1) * fx) * fy;
 }
 
+float determinant_sign(const Transform& t) {
+  const auto& m = t.matrix().m;
+  double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+               m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  return det < 0 ? -1.0f : 1.0f;
+}
+
 float triangle_area(Vec3f a, Vec3f b, Vec3f c) { return 0.5f * length(cross(b - a, c - a)); }
 
 }  // namespace
@@ -59,6 +66,8 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
   ShapeState& s = shapes_[i];
   s.instanced = animated;
   s.to_world = shape.to_world;
+  s.to_object = shape.to_world.inverse();
+  s.handedness = determinant_sign(shape.to_world);
   const std::string name = "shape " + std::to_string(i) + (shape.id.empty() ? "" : " ('" + shape.id + "')");
   if (shape.type == ShapeType::kSphere) {
     s.center = shape.to_world.point(Vec3f(0.0f));
@@ -84,6 +93,12 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
   const TriangleMesh& m = *s.mesh;
   for (const Vec3f& p : m.positions)
     if (!is_finite(p)) return invalid_argument(name + " has a non-finite vertex position");
+  s.face_normals.resize(m.triangle_count());
+  for (size_t t = 0; t < m.triangle_count(); ++t) {
+    Vec3f p0 = m.positions[m.indices[3 * t]], p1 = m.positions[m.indices[3 * t + 1]],
+          p2 = m.positions[m.indices[3 * t + 2]];
+    s.face_normals[t] = normalize(cross(p1 - p0, p2 - p0));
+  }
   return accel_->add_mesh(int(i), m.positions.data(), m.positions.size(), m.indices.data(), m.triangle_count(),
                           animated, shape.to_world);
 }
@@ -148,6 +163,8 @@ Status FrameScene::update(const Scene& scene) {
     if (!shapes_[i].instanced)
       return failed_precondition("shape " + std::to_string(i) + " moved but was not marked animated");
     shapes_[i].to_world = t;
+    shapes_[i].to_object = t.inverse();
+    shapes_[i].handedness = determinant_sign(t);
     scene_.shapes[i].to_world = t;
     if (scene_.shapes[i].type == ShapeType::kSphere) {
       shapes_[i].center = t.point(Vec3f(0.0f));
@@ -177,7 +194,7 @@ bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
     si->n = local;
     ns = local;
     // Sphere uv in the object frame (Mitsuba: phi / 2pi, theta / pi).
-    Vec3f lo = normalize(s.to_world.inverse().vector(local));
+    Vec3f lo = normalize(s.to_object.vector(local));
     float phi = std::atan2(lo.y, lo.x);
     if (phi < 0) phi += 2.0f * kPi;
     si->uv = {phi * kInvTwoPi, std::acos(std::clamp(lo.z, -1.0f, 1.0f)) * kInvPi};
@@ -188,7 +205,7 @@ bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
     Vec3f p0 = m.positions[i0], p1 = m.positions[i1], p2 = m.positions[i2];
     if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
     si->p = p0 * b0 + p1 * b1 + p2 * b2;
-    si->n = normalize(cross(p1 - p0, p2 - p0));
+    si->n = s.instanced ? normalize(s.to_world.normal(s.face_normals[hit.prim])) * s.handedness : s.face_normals[hit.prim];
     ns = si->n;
     if (!m.normals.empty() && !shape.face_normals) {
       Vec3f interp = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;
@@ -265,7 +282,7 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
         if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
         Vec2f b = square_to_uniform_triangle({u_tri, u.y});
         p = p0 * (1.0f - b.x - b.y) + p1 * b.x + p2 * b.y;
-        n = normalize(cross(p1 - p0, p2 - p0));
+        n = s.instanced ? normalize(s.to_world.normal(s.face_normals[tri])) * s.handedness : s.face_normals[tri];
         if (!m.normals.empty() && !shape.face_normals) {
           Vec3f interp = m.normals[i0] * (1.0f - b.x - b.y) + m.normals[i1] * b.x + m.normals[i2] * b.y;
           if (s.instanced) interp = s.to_world.normal(interp);

@@ -58,8 +58,10 @@ class FrameScene {
  private:
   struct ShapeState {
     std::shared_ptr<const TriangleMesh> mesh;  // world space if !instanced
+    std::vector<Vec3f> face_normals;           // unit, same space as `mesh` (saves a cross + sqrt per hit)
     bool instanced = false;
-    Transform to_world;
+    Transform to_world, to_object;
+    float handedness = 1;  // sign of det(to_world): a mirroring transform flips cross-product normals
     Vec3f center;       // sphere, world space
     float radius = 0;   // sphere, world space
     Distribution1D triangle_areas;  // area emitters only

@@ -54,14 +54,15 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
       EmitterSample es = scene.sample_emitter_direction(si, u_select, u_light);
       if (!es.weight.is_black()) {
         Vec3f wi_local = si.sh_frame.to_local(es.d);
-        Rgb f = bsdf_eval(bsdf, si.uv, wo, wi_local);
+        BsdfEval be = bsdf_eval_pdf(bsdf, si.uv, wo, wi_local);
+        const Rgb& f = be.value;
         if (!f.is_black()) {
           Ray shadow = si.spawn_ray(es.d);
           shadow.tmax = std::isinf(es.dist) ? kInfinity : es.dist * (1.0f - kShadowEpsilon);
           ++counters.rays;
           if (counters.ray_log) counters.ray_log->push_back({shadow, true});
           if (!scene.occluded(shadow)) {
-            float w = es.delta ? 1.0f : mis_power(es.pdf, bsdf_pdf(bsdf, si.uv, wo, wi_local));
+            float w = es.delta ? 1.0f : mis_power(es.pdf, be.pdf);
             result += throughput * f * es.weight * w;
           }
         }
