@@ -185,34 +185,38 @@ void run_quality(const Args& a, const BenchScene& bs, Loaded& l) {
     auto pt = render_frame_pt(*l.scene, rs, 0, {});
     if (!pt.ok()) std::exit(1);
     const double pt_pp = rel_mse_per_pixel(pt->color, l.reference), pt_gl = rel_mse_global(pt->color, l.reference);
-    GptSettings g = GptSettings::defaults_for(a.quality_shift);
-    auto r = render_frame_gpt(*l.scene, rs, g, 0, {});
-    if (!r.ok()) std::exit(1);
-    std::printf("quality %s budget %.1f s: PT %d spp relMSE %.5f (global %.5f) | G-PT %s %d spp in %.2f s, failure %.3f\n",
-                bs.name.c_str(), budget, pt->spp, pt_pp, pt_gl, shift_mapping_name(a.quality_shift), r->spp,
-                r->seconds, r->shift_failure_rate);
-    Image primal = r->buffers.primal;
-    for (size_t k = 0; k < primal.data().size(); ++k) primal.data()[k] += r->buffers.direct.data()[k];
-    const double primal_pp = rel_mse_per_pixel(primal, l.reference);
-    std::printf("  primal      relMSE %.5f (global %.5f)\n", primal_pp, rel_mse_global(primal, l.reference));
-    double l2_pp = 0;
-    for (ReconMethod m : {ReconMethod::kL2, ReconMethod::kL1, ReconMethod::kWeighted}) {
-      double secs = 0;
-      Image img = reconstruct_final(*r, m, &secs);
-      const double pp = rel_mse_per_pixel(img, l.reference), gl = rel_mse_global(img, l.reference);
-      if (m == ReconMethod::kL2) l2_pp = pp;
-      std::printf("  %-9s   relMSE %.5f (global %.5f)  PT/G-PT %.2fx (global %.2fx)  solve %.2f s\n",
-                  recon_method_name(m), pp, gl, pt_pp / pp, pt_gl / gl, secs);
+    for (bool rr : {true, false}) {
+      GptSettings g = GptSettings::defaults_for(a.quality_shift);
+      g.cached_rr = rr;
+      auto r = render_frame_gpt(*l.scene, rs, g, 0, {});
+      if (!r.ok()) std::exit(1);
+      std::printf("quality %s budget %.1f s: PT %d spp relMSE %.5f (global %.5f) | G-PT %s cached_rr=%s %d spp in "
+                  "%.2f s, failure %.3f\n",
+                  bs.name.c_str(), budget, pt->spp, pt_pp, pt_gl, shift_mapping_name(a.quality_shift),
+                  rr ? "on" : "off", r->spp, r->seconds, r->shift_failure_rate);
+      Image primal = r->buffers.primal;
+      for (size_t k = 0; k < primal.data().size(); ++k) primal.data()[k] += r->buffers.direct.data()[k];
+      const double primal_pp = rel_mse_per_pixel(primal, l.reference);
+      std::printf("  primal      relMSE %.5f (global %.5f)\n", primal_pp, rel_mse_global(primal, l.reference));
+      double l2_pp = 0;
+      for (ReconMethod m : {ReconMethod::kL2, ReconMethod::kL1, ReconMethod::kWeighted}) {
+        double secs = 0;
+        Image img = reconstruct_final(*r, m, &secs);
+        const double pp = rel_mse_per_pixel(img, l.reference), gl = rel_mse_global(img, l.reference);
+        if (m == ReconMethod::kL2) l2_pp = pp;
+        std::printf("  %-9s   relMSE %.5f (global %.5f)  PT/G-PT %.2fx (global %.2fx)  solve %.2f s\n",
+                    recon_method_name(m), pp, gl, pt_pp / pp, pt_gl / gl, secs);
+      }
+      // Predicted improvement of L2 over the G-PT primal from the measured variances (§6).
+      NoiseLevels noise;
+      noise[Term::kPrimal] = mean_finite(r->buffers.primal_var);
+      noise[Term::kDx] = mean_finite(r->buffers.dx_var);
+      noise[Term::kDy] = mean_finite(r->buffers.dy_var);
+      auto predicted = predicted_improvement(noise, ReconSettings(), /* temporal = */ false);
+      std::printf("  L2 vs primal at equal spp: predicted %.2fx, achieved %.2fx (relMSE)\n",
+                  predicted.ok() ? predicted.value() : -1.0, primal_pp / l2_pp);
+      std::fflush(stdout);
     }
-    // Predicted improvement of L2 over the G-PT primal from the measured variances (§6).
-    NoiseLevels noise;
-    noise[Term::kPrimal] = mean_finite(r->buffers.primal_var);
-    noise[Term::kDx] = mean_finite(r->buffers.dx_var);
-    noise[Term::kDy] = mean_finite(r->buffers.dy_var);
-    auto predicted = predicted_improvement(noise, ReconSettings(), /* temporal = */ false);
-    std::printf("  L2 vs primal at equal spp: predicted %.2fx, achieved %.2fx (relMSE)\n",
-                predicted.ok() ? predicted.value() : -1.0, primal_pp / l2_pp);
-    std::fflush(stdout);
   }
 }
 
