@@ -104,119 +104,223 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
   return prepared;
 }
 
-}  // namespace
+// Stage 1 state for one job: the prepared job and its world-space scene,
+// moved to each frame's time before that frame renders.
+class JobRenderer {
+ public:
+  static Expected<std::unique_ptr<JobRenderer>> create(const JobSpec& job, const JobRunOptions& options) {
+    auto prepared = prepare_job(job, options);
+    if (!prepared.ok()) return prepared.status();
+    std::unique_ptr<JobRenderer> r(new JobRenderer(job, std::move(prepared.value())));
+    Scene& desc = r->frame_desc_;
+    desc = r->pj_.scene;
+    if (!r->pj_.animation.empty())
+      GDVR_RETURN_IF_ERROR(apply_animation(r->pj_.animation, r->pj_.frames.front() / job.fps, &desc));
+    auto fs = FrameScene::create(desc, r->pj_.animated_shapes);
+    if (!fs.ok()) return fs.status();
+    r->scene_ = std::move(fs.value());
+    return r;
+  }
 
-Status validate_job(const JobSpec& job, const JobRunOptions& options) { return prepare_job(job, options).status(); }
+  const PreparedJob& prepared() const { return pj_; }
 
-Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallbacks& callbacks,
-               const std::atomic<bool>* cancel) {
-  auto prepared = prepare_job(job, options);
-  if (!prepared.ok()) return prepared.status();
-  PreparedJob& pj = prepared.value();
-
-  Scene frame_desc = pj.scene;
-  if (!pj.animation.empty()) GDVR_RETURN_IF_ERROR(apply_animation(pj.animation, pj.frames.front() / job.fps, &frame_desc));
-  auto frame_scene = FrameScene::create(frame_desc, pj.animated_shapes);
-  if (!frame_scene.ok()) return frame_scene.status();
-  FrameScene& scene = *frame_scene.value();
-
-  const std::set<int> skip(options.skip_frames.begin(), options.skip_frames.end());
-  std::vector<int> todo;
-  for (int f : pj.frames)
-    if (!skip.count(f)) todo.push_back(f);
-
-  JobProgress progress;
-  progress.frames_total = int(pj.frames.size());
-  progress.frames_done = int(pj.frames.size() - todo.size());
-  const auto job_start = std::chrono::steady_clock::now();
-  int rendered_here = 0;
-  auto report = [&](double frame_fraction) {
-    if (!callbacks.on_progress) return;
-    progress.fraction = (progress.frames_done + frame_fraction) / std::max(1, progress.frames_total);
-    double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - job_start).count();
-    double units_done = rendered_here + frame_fraction;
-    int remaining = int(todo.size()) - rendered_here;
-    progress.eta_seconds = units_done > 0.05 ? spent / units_done * (remaining - frame_fraction) : -1.0;
-    callbacks.on_progress(progress);
-  };
-
-  for (int frame : todo) {
-    if (cancel && cancel->load()) return cancelled("job cancelled");
-    if (!pj.animation.empty()) {
-      GDVR_RETURN_IF_ERROR(apply_animation(pj.animation, frame / job.fps, &frame_desc));
-      GDVR_RETURN_IF_ERROR(scene.update(frame_desc));
+  Expected<FrameBuffers> render(int frame, const FrameRenderControl& control) {
+    if (!pj_.animation.empty()) {
+      GDVR_RETURN_IF_ERROR(apply_animation(pj_.animation, frame / job_.fps, &frame_desc_));
+      GDVR_RETURN_IF_ERROR(scene_->update(frame_desc_));
     }
-    FrameRenderControl control;
-    control.cancel = cancel;
-    control.on_progress = report;
-    FrameOutput out;
+    FrameBuffers out;
     out.frame = frame;
     FrameStats& st = out.stats;
     st.frame = frame;
-    if (pj.gpt) {
-      auto result = render_frame_gpt(scene, pj.render, pj.gpt_settings, uint32_t(frame), control);
-      if (!result.ok()) return result.status().with_context("frame " + std::to_string(frame) + ": ");
+    if (pj_.gpt) {
+      auto result = render_frame_gpt(*scene_, pj_.render, pj_.gpt_settings, uint32_t(frame), control);
+      if (!result.ok()) return result.status();
       GptFrameResult& r = result.value();
       GradientFilmBuffers& b = r.buffers;
-      // Reconstruct the indirect part; light seen directly is added after the solve.
-      GradientFrame gf;
-      gf.buffer(Term::kPrimal) = b.primal;
-      gf.buffer(Term::kDx) = b.dx;
-      gf.buffer(Term::kDy) = b.dy;
-      gf.variance(Term::kPrimal) = b.primal_var;
-      gf.variance(Term::kDx) = b.dx_var;
-      gf.variance(Term::kDy) = b.dy_var;
-      auto recon = reconstruct_frame(gf, pj.gpt_settings.recon);
-      if (!recon.ok()) return recon.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
-      Image final_image = std::move(recon->frames.front());
-      for (size_t k = 0; k < final_image.data().size(); ++k) final_image.data()[k] += b.direct.data()[k];
-      out.image.add("", {"R", "G", "B"}, std::move(final_image));
-      out.image.add("primal", {"R", "G", "B"}, std::move(b.primal));
-      out.image.add("dx", {"R", "G", "B"}, std::move(b.dx));
-      out.image.add("dy", {"R", "G", "B"}, std::move(b.dy));
-      out.image.add("direct", {"R", "G", "B"}, std::move(b.direct));
-      out.image.add("shift_failure_rate", {"Y"}, std::move(b.shift_failure_rate));
-      out.image.add("primal_var", {"R", "G", "B"}, std::move(b.primal_var));
-      out.image.add("dx_var", {"R", "G", "B"}, std::move(b.dx_var));
-      out.image.add("dy_var", {"R", "G", "B"}, std::move(b.dy_var));
+      out.layers.add("primal", {"R", "G", "B"}, std::move(b.primal));
+      out.layers.add("dx", {"R", "G", "B"}, std::move(b.dx));
+      out.layers.add("dy", {"R", "G", "B"}, std::move(b.dy));
+      out.layers.add("direct", {"R", "G", "B"}, std::move(b.direct));
+      out.layers.add("shift_failure_rate", {"Y"}, std::move(b.shift_failure_rate));
+      out.layers.add("primal_var", {"R", "G", "B"}, std::move(b.primal_var));
+      out.layers.add("dx_var", {"R", "G", "B"}, std::move(b.dx_var));
+      out.layers.add("dy_var", {"R", "G", "B"}, std::move(b.dy_var));
       st.render_seconds = r.seconds;
-      st.reconstruct_seconds = recon->stats.seconds;
       st.spp = r.spp;
       st.rays = r.rays;
       if (r.invalid_samples > 0)
         st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples or gradients dropped");
-      if (recon->stats.total_non_finite() > 0)
-        st.left_out.push_back(std::to_string(recon->stats.total_non_finite()) +
-                              " non-finite constraints dropped by the reconstruction");
       bool glossy = false;
-      for (const Bsdf& bsdf : scene.scene().bsdfs)
-        glossy = glossy || bsdf.roughness() <= pj.gpt_settings.diffuse_roughness;
-      if (!glossy && pj.gpt_settings.shift != ShiftMapping::kReplay)
+      for (const Bsdf& bsdf : scene_->scene().bsdfs)
+        glossy = glossy || bsdf.roughness() <= pj_.gpt_settings.diffuse_roughness;
+      if (!glossy && pj_.gpt_settings.shift != ShiftMapping::kReplay)
         st.left_out.push_back("glossy shift machinery: no glossy or specular BSDF in the scene");
       st.left_out.push_back("temporal gradients: integrator gpt (spatial only)");
     } else {
-      auto result = render_frame_pt(scene, pj.render, uint32_t(frame), control);
-      if (!result.ok()) return result.status().with_context("frame " + std::to_string(frame) + ": ");
+      auto result = render_frame_pt(*scene_, pj_.render, uint32_t(frame), control);
+      if (!result.ok()) return result.status();
       FrameRenderResult& r = result.value();
-      out.image.add("", {"R", "G", "B"}, std::move(r.color));
-      out.image.add("direct", {"R", "G", "B"}, std::move(r.direct));
-      out.image.add("variance", {"R", "G", "B"}, std::move(r.variance));
+      out.layers.add("", {"R", "G", "B"}, std::move(r.color));
+      out.layers.add("direct", {"R", "G", "B"}, std::move(r.direct));
+      out.layers.add("variance", {"R", "G", "B"}, std::move(r.variance));
       st.render_seconds = r.seconds;
       st.spp = r.spp;
       st.rays = r.rays;
-      if (r.invalid_samples > 0)
-        st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples dropped");
+      if (r.invalid_samples > 0) st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples dropped");
       st.left_out.push_back("gradient sampling and reconstruction: integrator pt");
     }
-    st.samples = uint64_t(st.spp) * uint64_t(pj.render.width) * uint64_t(pj.render.height);
+    st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);
     st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;
     st.rays_per_second = st.render_seconds > 0 ? double(st.rays) / st.render_seconds : 0;
-    if (!scene.has_environment()) st.left_out.push_back("environment lookups: the scene has no environment");
+    if (!scene_->has_environment()) st.left_out.push_back("environment lookups: the scene has no environment");
+    return out;
+  }
 
-    ++rendered_here;
-    ++progress.frames_done;
-    if (callbacks.on_frame_final) callbacks.on_frame_final(out);
-    report(0.0);
+ private:
+  JobRenderer(const JobSpec& job, PreparedJob pj) : job_(job), pj_(std::move(pj)) {}
+  const JobSpec& job_;
+  PreparedJob pj_;
+  Scene frame_desc_;
+  std::unique_ptr<FrameScene> scene_;
+};
+
+// Progress over a list of frames: fraction of the whole job and an ETA from the
+// average time of the frames rendered in this run.
+class ProgressTracker {
+ public:
+  ProgressTracker(int total, int already_done, int todo, std::function<void(const JobProgress&)> sink)
+      : todo_(todo), sink_(std::move(sink)), start_(std::chrono::steady_clock::now()) {
+    progress_.frames_total = total;
+    progress_.frames_done = already_done;
+  }
+  void frame_progress(double frame_fraction) {
+    if (!sink_) return;
+    progress_.fraction = (progress_.frames_done + frame_fraction) / std::max(1, progress_.frames_total);
+    double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    double units_done = rendered_here_ + frame_fraction;
+    progress_.eta_seconds = units_done > 0.05 ? spent / units_done * (todo_ - rendered_here_ - frame_fraction) : -1.0;
+    sink_(progress_);
+  }
+  void frame_done() {
+    ++rendered_here_;
+    ++progress_.frames_done;
+    frame_progress(0.0);
+  }
+
+ private:
+  int todo_, rendered_here_ = 0;
+  JobProgress progress_;
+  std::function<void(const JobProgress&)> sink_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace
+
+Status validate_job(const JobSpec& job, const JobRunOptions& options) { return prepare_job(job, options).status(); }
+
+std::vector<int> frames_needed_to_finalize(const JobSpec&, const std::vector<int>&, int frame) {
+  // pt and gpt finalize each frame from its own buffers.
+  return {frame};
+}
+
+Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::map<int, FrameBuffers>& buffers) {
+  auto it = buffers.find(frame);
+  if (it == buffers.end()) return failed_precondition("finalize: no buffers for frame " + std::to_string(frame));
+  const FrameBuffers& fb = it->second;
+  FrameOutput out;
+  out.frame = frame;
+  out.stats = fb.stats;
+  if (job.integrator == "pt") {
+    out.image = fb.layers;
+    return out;
+  }
+  // Gradient-domain: reconstruct the indirect part; light seen directly from
+  // the camera is kept out of the solve and added after it (REFERENCE.md §1).
+  auto method = parse_recon_method(job.reconstruction.method);
+  if (!method.ok()) return method.status().with_context("job.reconstruction.");
+  ReconSettings recon = GptSettings::defaults_for(ShiftMapping::kReconnect).recon;
+  recon.method = method.value();
+  recon.alpha = job.reconstruction.alpha;
+  auto layer = [&](const char* name) -> const Image* {
+    const ImageLayer* l = fb.layers.find(name);
+    return l ? &l->image : nullptr;
+  };
+  for (const char* name : {"primal", "dx", "dy", "direct", "primal_var", "dx_var", "dy_var"})
+    if (!layer(name)) return invalid_argument(std::string("finalize: frame buffers lack the '") + name + "' layer");
+  GradientFrame gf;
+  gf.buffer(Term::kPrimal) = *layer("primal");
+  gf.buffer(Term::kDx) = *layer("dx");
+  gf.buffer(Term::kDy) = *layer("dy");
+  gf.variance(Term::kPrimal) = *layer("primal_var");
+  gf.variance(Term::kDx) = *layer("dx_var");
+  gf.variance(Term::kDy) = *layer("dy_var");
+  auto solved = reconstruct_frame(gf, recon);
+  if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+  Image final_image = std::move(solved->frames.front());
+  const Image& direct = *layer("direct");
+  for (size_t k = 0; k < final_image.data().size(); ++k) final_image.data()[k] += direct.data()[k];
+  out.image.add("", {"R", "G", "B"}, std::move(final_image));
+  for (const ImageLayer& l : fb.layers.layers) out.image.layers.push_back(l);
+  out.stats.reconstruct_seconds = solved->stats.seconds;
+  if (solved->stats.total_non_finite() > 0)
+    out.stats.left_out.push_back(std::to_string(solved->stats.total_non_finite()) +
+                                 " non-finite constraints dropped by the reconstruction");
+  return out;
+}
+
+Status render_job_buffers(const JobSpec& job, const JobRunOptions& options, const std::vector<int>& frames,
+                          const std::function<Status(FrameBuffers&&)>& on_buffers,
+                          const std::function<void(const JobProgress&)>& on_progress,
+                          const std::atomic<bool>* cancel) {
+  auto renderer = JobRenderer::create(job, options);
+  if (!renderer.ok()) return renderer.status();
+  const std::vector<int>& job_frames = renderer.value()->prepared().frames;
+  const std::set<int> valid(job_frames.begin(), job_frames.end());
+  for (int f : frames)
+    if (!valid.count(f)) return invalid_argument("frame " + std::to_string(f) + " is not in the job's frame range");
+  ProgressTracker progress(int(frames.size()), 0, int(frames.size()), on_progress);
+  for (int frame : frames) {
+    if (cancel && cancel->load()) return cancelled("job cancelled");
+    FrameRenderControl control;
+    control.cancel = cancel;
+    control.on_progress = [&](double f) { progress.frame_progress(f); };
+    auto buffers = renderer.value()->render(frame, control);
+    if (!buffers.ok()) return buffers.status().with_context("frame " + std::to_string(frame) + ": ");
+    GDVR_RETURN_IF_ERROR(on_buffers(std::move(buffers.value())));
+    progress.frame_done();
+  }
+  return Status::Ok();
+}
+
+Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallbacks& callbacks,
+               const std::atomic<bool>* cancel) {
+  auto renderer = JobRenderer::create(job, options);
+  if (!renderer.ok()) return renderer.status();
+  const std::vector<int>& job_frames = renderer.value()->prepared().frames;
+
+  const std::set<int> skip(options.skip_frames.begin(), options.skip_frames.end());
+  std::vector<int> todo;
+  for (int f : job_frames)
+    if (!skip.count(f)) todo.push_back(f);
+  ProgressTracker progress(int(job_frames.size()), int(job_frames.size() - todo.size()), int(todo.size()),
+                           callbacks.on_progress);
+
+  // Buffers stay in memory only while a frame that still has to be finalized needs them.
+  std::map<int, FrameBuffers> buffers;
+  for (int frame : todo) {
+    if (cancel && cancel->load()) return cancelled("job cancelled");
+    FrameRenderControl control;
+    control.cancel = cancel;
+    control.on_progress = [&](double f) { progress.frame_progress(f); };
+    auto rendered = renderer.value()->render(frame, control);
+    if (!rendered.ok()) return rendered.status().with_context("frame " + std::to_string(frame) + ": ");
+    buffers[frame] = std::move(rendered.value());
+    auto out = finalize_frame(job, frame, buffers);
+    if (!out.ok()) return out.status();
+    buffers.erase(frame);
+    if (callbacks.on_frame_final) callbacks.on_frame_final(out.value());
+    progress.frame_done();
   }
   return Status::Ok();
 }

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -59,5 +60,33 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
 
 // Validates a job (scene loads, frame range parses, values in range) without rendering.
 Status validate_job(const JobSpec& job, const JobRunOptions& options);
+
+// ---- Staged execution ----
+// A job runs in two stages, which a render farm can run as separate commands on
+// separate machines (run_job chains them in one process, so both give the same
+// frames):
+//   1. render: each frame to its sample buffers, every layer the integrator
+//      produces before reconstruction (pt: the image; gpt: primal, dx, dy, ...);
+//   2. finalize: buffers -> the final frame (reconstruction, direct light added).
+
+struct FrameBuffers {
+  int frame = 0;
+  LayeredImage layers;
+  FrameStats stats;  // render-stage statistics; finalize adds its own
+};
+
+// Renders `frames` (a subset of the job's frames, in any order) and hands each
+// frame's buffers to `on_buffers`; a non-ok Status from it stops the run.
+Status render_job_buffers(const JobSpec& job, const JobRunOptions& options, const std::vector<int>& frames,
+                          const std::function<Status(FrameBuffers&&)>& on_buffers,
+                          const std::function<void(const JobProgress&)>& on_progress,
+                          const std::atomic<bool>* cancel);
+
+// The frames whose buffers finalizing `frame` reads (its reconstruction
+// window), given all frames of the job.
+std::vector<int> frames_needed_to_finalize(const JobSpec& job, const std::vector<int>& job_frames, int frame);
+
+// Stage 2 for one frame. `buffers` must hold frames_needed_to_finalize(frame).
+Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::map<int, FrameBuffers>& buffers);
 
 }  // namespace gdvr
