@@ -23,6 +23,12 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr size_t kChunkBytes = 1 << 20;  // the API promises chunks of at most 1 MiB
+// Progress changes once per tile. Watchers get at most one FrameRendered per
+// interval (coalesced), and the render thread wakes them at most this often:
+// per-tile wake-ups of every watcher cost measurable render time (see
+// docs/service.md, streaming benchmark).
+constexpr auto kProgressEventInterval = std::chrono::milliseconds(250);
+constexpr auto kProgressNotifyInterval = std::chrono::milliseconds(50);
 
 int64_t now_ms() {
   using namespace std::chrono;
@@ -446,6 +452,7 @@ void JobManager::run(Job* job) {
     st = outputs->add_to_video(out.frame);
     if (!st.ok()) return fail_run(st.with_context("frame " + std::to_string(out.frame) + ": "));
   };
+  auto last_progress_notify = std::chrono::steady_clock::time_point{};
   cb.on_progress = [&](const JobProgress& p) {
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -455,7 +462,11 @@ void JobManager::run(Job* job) {
       job->progress.set_frames_total(int(job->frames.size()));
       ++job->progress_seq;
     }
-    cv_.notify_all();
+    auto now = std::chrono::steady_clock::now();
+    if (now - last_progress_notify >= kProgressNotifyInterval) {
+      last_progress_notify = now;
+      cv_.notify_all();
+    }
   };
 
   Status st = frame_error.ok() ? run_job(job->core, opts, cb, &job->cancel) : frame_error;
@@ -634,7 +645,7 @@ bool JobManager::send_frame(const Job& job, int frame, const FrameRecord& rec, b
       ff->set_payload(payloads[p].kind);
       ff->set_offset(offset);
       ff->set_total_size(bytes.size());
-      ff->set_data(bytes.substr(offset, n));
+      ff->set_data(bytes.data() + offset, n);
       ff->set_file_name(rec.file);
       ff->set_width(width);
       ff->set_height(height);
@@ -663,6 +674,7 @@ Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<boo
   int next_frame = req.has_from_frame() ? req.from_frame() : INT32_MIN;
   bool queued_sent = false, started_sent = false;
   uint64_t progress_sent = 0;
+  auto next_progress_at = std::chrono::steady_clock::time_point{};
   for (;;) {
     // Snapshot under the lock, send without it: a slow client must not stall
     // the render.
@@ -718,19 +730,21 @@ Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<boo
       (void)send(ev);
       return Status::Ok();
     }
-    if (state == v1::JOB_STATE_RUNNING && progress_seq != progress_sent) {
+    if (state == v1::JOB_STATE_RUNNING && progress_seq != progress_sent &&
+        std::chrono::steady_clock::now() >= next_progress_at) {
       ev.Clear();
       ev.set_job_id(job->id);
       *ev.mutable_frame_rendered()->mutable_progress() = progress;
       if (!send(ev)) return Status::Ok();
       progress_sent = progress_seq;
+      next_progress_at = std::chrono::steady_clock::now() + kProgressEventInterval;
     }
     // ---- Wait for news ----
     std::unique_lock<std::mutex> lock(mu_);
     cv_.wait_for(lock, std::chrono::milliseconds(500), [&] {
-      if (stopping_ || job->state != state || job->progress_seq != progress_seq) return true;
-      auto it = job->final_frames.lower_bound(next_frame);
-      return it != job->final_frames.end();
+      if (stopping_ || job->state != state) return true;
+      if (job->final_frames.lower_bound(next_frame) != job->final_frames.end()) return true;
+      return job->progress_seq != progress_sent && std::chrono::steady_clock::now() >= next_progress_at;
     });
     if (stopping_) return Status(StatusCode::kUnavailable, "server is shutting down; watch again to resume");
     lock.unlock();
