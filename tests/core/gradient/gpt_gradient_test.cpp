@@ -178,7 +178,7 @@ TEST_P(GptGradientTest, ReconstructionConvergesToPtAboutAsOneOverSpp) {
   EXPECT_LT(ratio, 32.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Shifts, GptGradientTest,
+INSTANTIATE_TEST_SUITE_P(Gpt, GptGradientTest,
                          ::testing::Values(ShiftMapping::kReplay, ShiftMapping::kReconnect, ShiftMapping::kHybrid),
                          [](const auto& info) { return std::string(shift_mapping_name(info.param)); });
 

@@ -49,7 +49,7 @@ TEST_P(GptShiftTest, NoNanOrInfInAnyLayer) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Shifts, GptShiftTest,
+INSTANTIATE_TEST_SUITE_P(Gpt, GptShiftTest,
                          ::testing::Values(ShiftMapping::kReplay, ShiftMapping::kReconnect, ShiftMapping::kHybrid),
                          [](const auto& info) { return std::string(shift_mapping_name(info.param)); });
 

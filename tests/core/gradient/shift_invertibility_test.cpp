@@ -102,7 +102,7 @@ TEST(ShiftReplayTest, ReplayWeightsAreOneHalfAndTheOffsetIsThePathTracer) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Shifts, ShiftInvertibilityTest,
+INSTANTIATE_TEST_SUITE_P(Shift, ShiftInvertibilityTest,
                          ::testing::Values(InvertCase{ShiftMapping::kReconnect, "cbox", 0.001f},
                                            InvertCase{ShiftMapping::kReconnect, "veach-mis", 0.001f},
                                            InvertCase{ShiftMapping::kReconnect, "veach-mis", 10.0f},
