@@ -11,21 +11,23 @@
 #   GDVR_BUILD_DIR        build folder (default build)
 #   GDVR_DEMO_SKIP_BUILD  1: use the binaries already in GDVR_BUILD_DIR
 #   GDVR_DEMO_JOB         job file (default scenes/demo/demo_job.json)
-#   GDVR_DEMO_STATE       the server's job database and output root
-#                         (default out/.demo-server)
+#   GDVR_DEMO_STATE       where the server keeps its job database, job folders
+#                         and log (default out/.demo-server)
 #   GDVR_DEMO_THREADS     render threads (default: all cores)
 #
 # Idempotent: the job is submitted with a key derived from the job file and the
-# server binary, and the server's state persists in GDVR_DEMO_STATE, so running
-# again with nothing changed streams the finished job back without rendering it
-# again, and a run that was interrupted resumes where it stopped.
+# server binary, and the server's state persists in GDVR_DEMO_STATE/<key>, so
+# running again with nothing changed streams the finished job back without
+# rendering it again, and a run that was interrupted resumes where it stopped.
+# State of other keys (an older job file or build) is deleted, so a stale
+# unfinished job never resumes ahead of this one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 OUT=${1:-out/demo}
 BUILD_DIR=${GDVR_BUILD_DIR:-build}
 JOB=${GDVR_DEMO_JOB:-scenes/demo/demo_job.json}
-STATE=${GDVR_DEMO_STATE:-out/.demo-server}
+STATE_ROOT=${GDVR_DEMO_STATE:-out/.demo-server}
 ASSET_ROOT=scenes
 
 if [ "${GDVR_DEMO_SKIP_BUILD:-0}" != 1 ]; then
@@ -37,7 +39,7 @@ for b in "$SERVER_BIN" "$CLI"; do
   [ -x "$b" ] || { echo "demo: $b is missing; run deploy/build.sh" >&2; exit 1; }
 done
 
-mkdir -p "$OUT" "$STATE"
+mkdir -p "$OUT"
 # The folder holds exactly this run's results.
 rm -f "$OUT"/frame_*.exr "$OUT"/preview_*.png "$OUT"/video.mp4 "$OUT"/video.mov "$OUT"/video.mkv "$OUT"/stats.json
 
@@ -46,6 +48,9 @@ rm -f "$OUT"/frame_*.exr "$OUT"/preview_*.png "$OUT"/video.mp4 "$OUT"/video.mov 
 JOB_SCENE=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["scene"])' "$JOB")
 SCENE=$(realpath --relative-to="$ASSET_ROOT" "$(dirname "$JOB")/$JOB_SCENE")
 KEY=demo-$(cat "$JOB" "$SERVER_BIN" | sha256sum | cut -c1-24)
+STATE=$STATE_ROOT/$KEY
+mkdir -p "$STATE"
+find "$STATE_ROOT" -mindepth 1 -maxdepth 1 -type d -name 'demo-*' ! -name "$KEY" -exec rm -rf {} +
 
 # ---- Start gdvr-server on an ephemeral localhost port ----
 rm -f "$STATE/port"
