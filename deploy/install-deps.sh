@@ -18,6 +18,8 @@ PACKAGES=(
   python3-grpcio python3-protobuf python3-numpy python3-setuptools
   # tests
   libgtest-dev libgmock-dev
+  # systemd-analyze verify of deploy/systemd (tests/farm)
+  systemd
 )
 
 missing=()
