@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <limits>
 #include <set>
 
 #include "core/gradient/gpt_integrator.h"
@@ -9,6 +10,11 @@
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
 #include "core/scene/scene_loader.h"
+#include "core/temporal/pass_schedule.h"
+#include "core/temporal/stream_schedule.h"
+#include "core/temporal/temporal_buffers.h"
+#include "core/temporal/temporal_window.h"
+#include "core/temporal/tgpt_frame.h"
 
 namespace gdvr {
 namespace {
@@ -31,7 +37,32 @@ struct PreparedJob {
   FrameRenderSettings render;
   bool gpt = false;
   GptSettings gpt_settings;
+  bool tgpt = false;
+  TgptSettings tgpt_settings;
 };
+
+// T-GPT options from the job (stage 1 and stage 2 both build them, so a farm's
+// finalize process needs only the job and the buffers).
+Expected<TgptSettings> tgpt_settings_for(const JobSpec& job) {
+  auto shift = parse_shift_mapping(job.shift);
+  if (!shift.ok()) return shift.status().with_context("job.");
+  auto method = parse_recon_method(job.reconstruction.method);
+  if (!method.ok()) return method.status().with_context("job.reconstruction.");
+  TgptSettings s;
+  s.gpt = GptSettings::defaults_for(shift.value());
+  s.recon.method = method.value();
+  s.recon.alpha = job.reconstruction.alpha;
+  s.window = job.reconstruction.window;
+  if (s.window < 1)
+    return invalid_argument("job.reconstruction.window must be at least 1 (got " + std::to_string(s.window) + ")");
+  GDVR_RETURN_IF_ERROR(s.validate().with_context("job: "));
+  return s;
+}
+
+int frame_position(const std::vector<int>& frames, int frame) {
+  auto it = std::lower_bound(frames.begin(), frames.end(), frame);
+  return it != frames.end() && *it == frame ? int(it - frames.begin()) : -1;
+}
 
 Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions& options) {
   if (job.scene.empty()) return invalid_argument("job.scene: no scene given");
@@ -46,8 +77,8 @@ Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions
 }
 
 Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& options) {
-  if (job.integrator != "pt" && job.integrator != "gpt")
-    return unimplemented("job.integrator: '" + job.integrator + "' is not available yet (supported: pt, gpt)");
+  if (job.integrator != "pt" && job.integrator != "gpt" && job.integrator != "tgpt")
+    return unimplemented("job.integrator: '" + job.integrator + "' is not available (supported: pt, gpt, tgpt)");
   if (!(job.fps > 0) || !std::isfinite(job.fps)) return invalid_argument("job.fps must be a positive number");
   if (job.width < 0 || job.height < 0 || job.width > 16384 || job.height > 16384)
     return invalid_argument("job.width/job.height must be between 1 and 16384 (0 = the scene's)");
@@ -101,6 +132,12 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
     prepared.gpt_settings.recon.alpha = job.reconstruction.alpha;
     GDVR_RETURN_IF_ERROR(prepared.gpt_settings.validate().with_context("job: "));
   }
+  if (job.integrator == "tgpt") {
+    auto s = tgpt_settings_for(job);
+    if (!s.ok()) return s.status();
+    prepared.tgpt = true;
+    prepared.tgpt_settings = std::move(s.value());
+  }
   return prepared;
 }
 
@@ -133,7 +170,9 @@ class JobRenderer {
     out.frame = frame;
     FrameStats& st = out.stats;
     st.frame = frame;
-    if (pj_.gpt) {
+    if (pj_.tgpt) {
+      GDVR_RETURN_IF_ERROR(render_tgpt(frame, control, &out));
+    } else if (pj_.gpt) {
       auto result = render_frame_gpt(*scene_, pj_.render, pj_.gpt_settings, uint32_t(frame), control);
       if (!result.ok()) return result.status();
       GptFrameResult& r = result.value();
@@ -179,10 +218,68 @@ class JobRenderer {
 
  private:
   JobRenderer(const JobSpec& job, PreparedJob pj) : job_(job), pj_(std::move(pj)) {}
+
+  // ---- T-GPT stage 1: two half passes, motion fields where the pair changes ----
+  Status render_tgpt(int frame, const FrameRenderControl& control, FrameBuffers* out) {
+    const std::vector<int>& frames = pj_.frames;
+    const int pos = frame_position(frames, frame);
+    if (pos < 0) return invalid_argument("frame " + std::to_string(frame) + " is not in the job's frame range");
+    // The neighbours' animated descriptions (copies share meshes and textures).
+    Scene prev_desc, next_desc;
+    TgptNeighbourhood nb;
+    nb.at_t = &frame_desc_;
+    auto neighbour = [&](int f, Scene* desc) -> Status {
+      *desc = frame_desc_;
+      if (!pj_.animation.empty()) GDVR_RETURN_IF_ERROR(apply_animation(pj_.animation, f / job_.fps, desc));
+      return Status::Ok();
+    };
+    if (pos > 0) {
+      GDVR_RETURN_IF_ERROR(neighbour(frames[size_t(pos) - 1], &prev_desc));
+      nb.prev = &prev_desc;
+      nb.to_prev = detect_changes(prev_desc, frame_desc_);
+    }
+    if (size_t(pos) + 1 < frames.size()) {
+      GDVR_RETURN_IF_ERROR(neighbour(frames[size_t(pos) + 1], &next_desc));
+      nb.next = &next_desc;
+      nb.to_next = detect_changes(frame_desc_, next_desc);
+    }
+    // Across a static pair, pass A of t replays pass B of t−1 in an identical
+    // scene: same numbers, same image; copy it when we rendered it (and no
+    // time budget made the pass sizes differ).
+    const GradientFilmBuffers* reuse = nullptr;
+    if (pos > 0 && last_b_frame_ == frames[size_t(pos) - 1] && !nb.to_prev.any() && pj_.render.time_budget_s <= 0)
+      reuse = &last_b_;
+    auto result = render_tgpt_frame(*scene_, pj_.render, pj_.tgpt_settings, tgpt_pass_streams(frames, size_t(pos)),
+                                    nb, reuse, control);
+    if (!result.ok()) return result.status();
+    TgptFrameRender& r = result.value();
+    last_b_frame_ = std::numeric_limits<int>::min();
+    if (nb.next && !nb.to_next.any()) {
+      last_b_ = r.b;
+      last_b_frame_ = frame;
+    }
+    FrameStats& st = out->stats;
+    st.render_seconds = r.seconds;
+    st.spp = r.spp;
+    st.rays = r.rays;
+    if (r.invalid_samples > 0)
+      st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples or gradients dropped");
+    bool glossy = false;
+    for (const Bsdf& bsdf : scene_->scene().bsdfs)
+      glossy = glossy || bsdf.roughness() <= pj_.tgpt_settings.gpt.diffuse_roughness;
+    if (!glossy && pj_.tgpt_settings.gpt.shift != ShiftMapping::kReplay)
+      st.left_out.push_back("glossy shift machinery: no glossy or specular BSDF in the scene");
+    for (std::string& s : r.left_out) st.left_out.push_back(std::move(s));
+    out->layers = tgpt_frame_layers(std::move(r));
+    return Status::Ok();
+  }
+
   const JobSpec& job_;
   PreparedJob pj_;
   Scene frame_desc_;
   std::unique_ptr<FrameScene> scene_;
+  GradientFilmBuffers last_b_;  // pass B of frame last_b_frame_, kept only across a static pair
+  int last_b_frame_ = std::numeric_limits<int>::min();
 };
 
 // Progress over a list of frames: fraction of the whole job and an ETA from the
@@ -219,12 +316,100 @@ class ProgressTracker {
 
 Status validate_job(const JobSpec& job, const JobRunOptions& options) { return prepare_job(job, options).status(); }
 
-std::vector<int> frames_needed_to_finalize(const JobSpec&, const std::vector<int>&, int frame) {
-  // pt and gpt finalize each frame from its own buffers.
-  return {frame};
+std::vector<int> frames_needed_to_finalize(const JobSpec& job, const std::vector<int>& job_frames, int frame) {
+  const int pos = frame_position(job_frames, frame);
+  if (job.integrator != "tgpt" || pos < 0) return {frame};  // pt and gpt: the frame's own buffers
+  // tgpt: every frame of every window containing the frame, and the next frame
+  // (its dt layer); see core/temporal/temporal_window.h.
+  std::vector<int> out;
+  for (int p : positions_needed(int(job_frames.size()), job.reconstruction.window, /* hop = */ 0, pos))
+    out.push_back(job_frames[size_t(p)]);
+  return out;
 }
 
+namespace {
+
+// ---- T-GPT stage 2 ----
+// The window solutions are cached in `cache` (run_job keeps one for the whole
+// shot; a stand-alone finalize uses a fresh one and re-solves the windows of
+// its frame, with the same result).
+Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const std::map<int, FrameBuffers>& buffers,
+                                          const std::vector<int>& job_frames, TemporalWindowCache* cache) {
+  auto settings = tgpt_settings_for(job);
+  if (!settings.ok()) return settings.status();
+  const int pos = frame_position(job_frames, frame);
+  if (pos < 0) return invalid_argument("frame " + std::to_string(frame) + " is not in the job's frame range");
+  const int n = int(job_frames.size());
+  auto layers_at = [&](int p) -> const LayeredImage* {
+    if (p < 0 || p >= n) return nullptr;
+    auto it = buffers.find(job_frames[size_t(p)]);
+    return it == buffers.end() ? nullptr : &it->second.layers;
+  };
+  for (int f : frames_needed_to_finalize(job, job_frames, frame))
+    if (!buffers.count(f))
+      return failed_precondition("finalize: frame " + std::to_string(frame) + " needs the buffers of frame " +
+                                 std::to_string(f));
+  const FrameBuffers& fb = buffers.at(frame);
+  const ImageLayer* direct = fb.layers.find("direct");
+  if (!direct) return invalid_argument("finalize: frame buffers lack the 'direct' layer");
+
+  ReconStats recon_stats;
+  auto solved = cache->reconstruct(pos, layers_at, &recon_stats);
+  if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+  Image final_image = std::move(solved.value());
+  for (size_t k = 0; k < final_image.data().size(); ++k) final_image.data()[k] += direct->image.data()[k];
+
+  FrameOutput out;
+  out.frame = frame;
+  out.stats = fb.stats;
+  out.stats.reconstruct_seconds = recon_stats.seconds;
+  out.image.add("", {"R", "G", "B"}, std::move(final_image));
+  // The frame's own temporal layers (towards the next frame of the job).
+  TemporalGradients tg;
+  if (const LayeredImage* next = layers_at(pos + 1)) {
+    auto g = temporal_gradients(fb.layers, *next, settings.value());
+    if (!g.ok()) return g.status().with_context("frame " + std::to_string(frame) + ": ");
+    tg = std::move(g.value());
+  } else {
+    const int w = direct->image.width(), h = direct->image.height();
+    for (Image* im : {&tg.dt, &tg.dxdt, &tg.dydt, &tg.dt_var, &tg.dxdt_var, &tg.dydt_var}) *im = Image(w, h, 3);
+    tg.failure_rate = Image(w, h, 1);
+  }
+  for (const char* name : {"primal", "dx", "dy"})
+    if (const ImageLayer* l = fb.layers.find(name)) out.image.layers.push_back(*l);
+  out.image.add("dt", {"R", "G", "B"}, std::move(tg.dt));
+  out.image.add("dxdt", {"R", "G", "B"}, std::move(tg.dxdt));
+  out.image.add("dydt", {"R", "G", "B"}, std::move(tg.dydt));
+  for (const char* name : {"direct", "primal_var", "dx_var", "dy_var"})
+    if (const ImageLayer* l = fb.layers.find(name)) out.image.layers.push_back(*l);
+  out.image.add("dt_var", {"R", "G", "B"}, std::move(tg.dt_var));
+  out.image.add("dxdt_var", {"R", "G", "B"}, std::move(tg.dxdt_var));
+  out.image.add("dydt_var", {"R", "G", "B"}, std::move(tg.dydt_var));
+  if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
+  out.image.add("temporal_failure_rate", {"Y"}, std::move(tg.failure_rate));
+  if (const ImageLayer* l = fb.layers.find("motion")) out.image.layers.push_back(*l);
+  else out.image.add("motion", {"X", "Y", "V"}, Image(direct->image.width(), direct->image.height(), 3));
+  if (settings->window == 1)
+    out.stats.left_out.push_back("temporal terms in the solve: window of 1 frame (spatial reconstruction)");
+  if (!settings->motion_vectors)
+    out.stats.left_out.push_back("temporal masks: motion vectors off");
+  if (recon_stats.total_non_finite() > 0)
+    out.stats.left_out.push_back(std::to_string(recon_stats.total_non_finite()) +
+                                 " non-finite constraints dropped by the reconstruction");
+  return out;
+}
+
+}  // namespace
+
 Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::map<int, FrameBuffers>& buffers) {
+  if (job.integrator == "tgpt") {
+    auto frames = parse_frame_range(job.frames);
+    if (!frames.ok()) return frames.status().with_context("job.frames: ");
+    auto settings = tgpt_settings_for(job);
+    if (!settings.ok()) return settings.status();
+    TemporalWindowCache cache(settings.value(), int(frames->size()));
+    return finalize_tgpt_frame(job, frame, buffers, frames.value(), &cache);
+  }
   auto it = buffers.find(frame);
   if (it == buffers.end()) return failed_precondition("finalize: no buffers for frame " + std::to_string(frame));
   const FrameBuffers& fb = it->second;
@@ -300,15 +485,28 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
   const std::vector<int>& job_frames = renderer.value()->prepared().frames;
 
   const std::set<int> skip(options.skip_frames.begin(), options.skip_frames.end());
-  std::vector<int> todo;
+  std::vector<int> todo;  // frames to finalize, in order
   for (int f : job_frames)
     if (!skip.count(f)) todo.push_back(f);
-  ProgressTracker progress(int(job_frames.size()), int(job_frames.size() - todo.size()), int(todo.size()),
-                           callbacks.on_progress);
+  // Frames to render: everything a frame still to finalize reads (for tgpt its
+  // windows, which may include already final frames after a resume).
+  std::vector<std::vector<int>> needs;
+  for (int f : todo) needs.push_back(frames_needed_to_finalize(job, job_frames, f));
+  StreamSchedule schedule(todo, std::move(needs));
+  // Progress counts rendered frames (the cost); for pt and gpt that is the
+  // frames finalized, for tgpt the final frames trail by up to a window.
+  const int render_count = int(schedule.render_order().size());
+  const int already_done = int(job_frames.size() - todo.size());
+  ProgressTracker progress(already_done + render_count, already_done, render_count, callbacks.on_progress);
+  std::unique_ptr<TemporalWindowCache> windows;
+  if (renderer.value()->prepared().tgpt)
+    windows = std::make_unique<TemporalWindowCache>(renderer.value()->prepared().tgpt_settings, int(job_frames.size()));
 
-  // Buffers stay in memory only while a frame that still has to be finalized needs them.
+  // Streaming: after each rendered frame, finalize (in order) every frame whose
+  // buffers are all in, then drop the buffers no later frame reads; what is
+  // held is bounded by the reconstruction window (1 frame for pt and gpt).
   std::map<int, FrameBuffers> buffers;
-  for (int frame : todo) {
+  for (int frame : schedule.render_order()) {
     if (cancel && cancel->load()) return cancelled("job cancelled");
     FrameRenderControl control;
     control.cancel = cancel;
@@ -316,11 +514,17 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
     auto rendered = renderer.value()->render(frame, control);
     if (!rendered.ok()) return rendered.status().with_context("frame " + std::to_string(frame) + ": ");
     buffers[frame] = std::move(rendered.value());
-    auto out = finalize_frame(job, frame, buffers);
-    if (!out.ok()) return out.status();
-    buffers.erase(frame);
-    if (callbacks.on_frame_final) callbacks.on_frame_final(out.value());
+    schedule.rendered(frame);
     progress.frame_done();
+    for (int f = schedule.ready(); f >= 0; f = schedule.ready()) {
+      auto out = windows ? finalize_tgpt_frame(job, f, buffers, job_frames, windows.get())
+                         : finalize_frame(job, f, buffers);
+      if (!out.ok()) return out.status();
+      if (callbacks.on_frame_final) callbacks.on_frame_final(out.value());
+      schedule.finalized();
+      if (windows) windows->release_before(frame_position(job_frames, f) + 1);
+    }
+    for (int f : schedule.releasable()) buffers.erase(f);
   }
   return Status::Ok();
 }

@@ -1,0 +1,135 @@
+#include "core/temporal/temporal_buffers.h"
+
+#include <string>
+
+namespace gdvr {
+namespace {
+
+const std::vector<std::string> kRgb = {"R", "G", "B"};
+
+Image average(const Image& a, const Image& b, float scale) {
+  Image out(a.width(), a.height(), a.channels());
+  for (size_t i = 0; i < out.data().size(); ++i) out.data()[i] = scale * (a.data()[i] + b.data()[i]);
+  return out;
+}
+
+Image difference(const Image& next, const Image& cur) {
+  Image out(cur.width(), cur.height(), cur.channels());
+  for (size_t i = 0; i < out.data().size(); ++i) out.data()[i] = next.data()[i] - cur.data()[i];
+  return out;
+}
+
+// Var(A − B) ≤ Var A + Var B + 2·sqrt(Var A·Var B); we use Var A + Var B, which
+// ignores the (positive, wanted) correlation of the replay pair: an upper bound
+// for a positively correlated pair, i.e. the weighted solver trusts dt less
+// than it could. The half buffers that would measure it are not kept.
+Image sum(const Image& a, const Image& b) { return average(a, b, 1.0f); }
+
+}  // namespace
+
+LayeredImage tgpt_frame_layers(TgptFrameRender&& r) {
+  LayeredImage L;
+  GradientFilmBuffers& a = r.a;
+  GradientFilmBuffers& b = r.b;
+  // ---- The frame's estimates: average of the two independent half passes ----
+  L.add("primal", kRgb, average(a.primal, b.primal, 0.5f));
+  L.add("dx", kRgb, average(a.dx, b.dx, 0.5f));
+  L.add("dy", kRgb, average(a.dy, b.dy, 0.5f));
+  L.add("direct", kRgb, average(a.direct, b.direct, 0.5f));
+  L.add("shift_failure_rate", {"Y"}, average(a.shift_failure_rate, b.shift_failure_rate, 0.5f));
+  // Var((A + B)/2) = (Var A + Var B)/4 for independent streams.
+  L.add("primal_var", kRgb, average(a.primal_var, b.primal_var, 0.25f));
+  L.add("dx_var", kRgb, average(a.dx_var, b.dx_var, 0.25f));
+  L.add("dy_var", kRgb, average(a.dy_var, b.dy_var, 0.25f));
+  // ---- The passes, for the temporal differences of stage 2 ----
+  for (auto [prefix, p] : {std::pair<const char*, GradientFilmBuffers*>{"a_", &a}, {"b_", &b}}) {
+    const std::string s = prefix;
+    L.add(s + "primal", kRgb, std::move(p->primal));
+    L.add(s + "dx", kRgb, std::move(p->dx));
+    L.add(s + "dy", kRgb, std::move(p->dy));
+    L.add(s + "primal_var", kRgb, std::move(p->primal_var));
+    L.add(s + "dx_var", kRgb, std::move(p->dx_var));
+    L.add(s + "dy_var", kRgb, std::move(p->dy_var));
+  }
+  if (!r.forward.offsets.empty()) L.add("motion", {"X", "Y", "V"}, std::move(r.forward.offsets));
+  if (!r.backward.offsets.empty()) L.add("motion_back", {"X", "Y", "V"}, std::move(r.backward.offsets));
+  return L;
+}
+
+Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const LayeredImage& next,
+                                               const TgptSettings& settings) {
+  auto need = [](const LayeredImage& L, const char* name, const char* which) -> Expected<const Image*> {
+    const ImageLayer* l = L.find(name);
+    if (!l) return invalid_argument(std::string("tgpt: ") + which + " frame's buffers lack the '" + name + "' layer");
+    return &l->image;
+  };
+  auto primal = need(t, "primal", "this");
+  if (!primal.ok()) return primal.status();
+  const int w = primal.value()->width(), h = primal.value()->height();
+  TemporalGradients g;
+  g.failure_rate = Image(w, h, 1);
+  const ImageLayer* forward = t.find("motion");
+  if (!forward) {
+    // Static pair: the replayed offset would be the base path itself
+    // (REFERENCE.md §4, "Static content needs no temporal sampling").
+    g.static_pair = true;
+    for (Image* im : {&g.dt, &g.dxdt, &g.dydt, &g.dt_var, &g.dxdt_var, &g.dydt_var}) *im = Image(w, h, 3);
+    return g;
+  }
+  const char* names[3] = {"primal", "dx", "dy"};
+  Image* values[3] = {&g.dt, &g.dxdt, &g.dydt};
+  Image* vars[3] = {&g.dt_var, &g.dxdt_var, &g.dydt_var};
+  for (int k = 0; k < 3; ++k) {
+    const std::string n = names[k];
+    auto bt = need(t, ("b_" + n).c_str(), "this");
+    auto an = need(next, ("a_" + n).c_str(), "next");
+    auto bt_var = need(t, ("b_" + n + "_var").c_str(), "this");
+    auto an_var = need(next, ("a_" + n + "_var").c_str(), "next");
+    for (auto* e : {&bt, &an, &bt_var, &an_var})
+      if (!e->ok()) return e->status();
+    if (an.value()->width() != w || an.value()->height() != h)
+      return invalid_argument("tgpt: the next frame's buffers have a different size");
+    *values[k] = difference(*an.value(), *bt.value());
+    *vars[k] = sum(*an_var.value(), *bt_var.value());
+  }
+  if (settings.motion_vectors) {
+    const ImageLayer* backward = next.find("motion_back");
+    if (!backward) return invalid_argument("tgpt: the next frame's buffers lack 'motion_back' although this frame has 'motion'");
+    TemporalMask mask = temporal_consistency(forward->image, backward->image, settings);
+    g.failed = mask.failed;
+    g.failure_rate = std::move(mask.failure);
+    // Zero the dropped values too, so the EXR layers show what the solve uses.
+    for (size_t p = 0; p < mask.valid.size(); ++p)
+      if (!mask.valid[p])
+        for (Image* im : values)
+          for (int c = 0; c < 3; ++c) im->data()[p * 3 + c] = 0.0f;
+    g.valid = std::move(mask.valid);
+  }
+  return g;
+}
+
+Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, const TemporalGradients* temporal) {
+  GradientFrame gf;
+  const std::pair<Term, const char*> spatial[3] = {{Term::kPrimal, "primal"}, {Term::kDx, "dx"}, {Term::kDy, "dy"}};
+  for (auto [term, name] : spatial) {
+    const ImageLayer* v = t.find(name);
+    const ImageLayer* var = t.find(std::string(name) + "_var");
+    if (!v || !var) return invalid_argument(std::string("tgpt: frame buffers lack the '") + name + "' layer or its variance");
+    gf.buffer(term) = v->image;
+    gf.variance(term) = var->image;
+  }
+  if (temporal) {
+    gf.buffer(Term::kDt) = temporal->dt;
+    gf.buffer(Term::kDxdt) = temporal->dxdt;
+    gf.buffer(Term::kDydt) = temporal->dydt;
+    gf.variance(Term::kDt) = temporal->dt_var;
+    gf.variance(Term::kDxdt) = temporal->dxdt_var;
+    gf.variance(Term::kDydt) = temporal->dydt_var;
+    if (!temporal->valid.empty())
+      for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) gf.mask(term) = temporal->valid;
+  }
+  GDVR_RETURN_IF_ERROR(gf.validate());
+  return gf;
+}
+
+}  // namespace gdvr

@@ -1,0 +1,52 @@
+// The named buffers of T-GPT and the temporal gradients made from them
+// (STYLE.md: named buffers, not magic indices).
+//
+// Stage 1 stores per frame (tgpt_frame_layers): both half passes
+// ("a_primal", "a_dx", "a_dy", "b_…", with "_var" variances), their average
+// under the G-PT names ("primal", "dx", "dy", "direct", "*_var",
+// "shift_failure_rate"), and the motion fields "motion" (towards the next
+// frame) and "motion_back" (towards the previous one). A frame carries
+// "motion" if and only if the pair (t, t_next) changes: its absence is how
+// stage 2, which sees only buffers, knows the pair is static.
+//
+// Stage 2 (temporal_gradients) forms, from frame t's pass B and frame
+// t_next's pass A, which replay the same random numbers (pass_schedule.h):
+//   dt_t   = A_{t+1}.primal − B_t.primal   ≈ I_{t+1}(p) − I_t(p)
+//   dxdt_t = A_{t+1}.dx − B_t.dx,  dydt_t = A_{t+1}.dy − B_t.dy
+// i.e. the same-pixel differences that core/recon's H_dt, H_dxdt, H_dydt
+// expect (REFERENCE.md §5). Each is unbiased (difference of two unbiased
+// estimates), and low-variance where the replay pair stays correlated.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/image/image.h"
+#include "core/recon/gradient_frame.h"
+#include "core/temporal/tgpt_frame.h"
+#include "core/temporal/tgpt_settings.h"
+
+namespace gdvr {
+
+// Stage 1 → buffers (moves the images out of `render`).
+LayeredImage tgpt_frame_layers(TgptFrameRender&& render);
+
+struct TemporalGradients {
+  Image dt, dxdt, dydt;              // RGB; 0 where masked
+  Image dt_var, dxdt_var, dydt_var;  // RGB
+  std::vector<uint8_t> valid;        // empty: every pixel valid
+  Image failure_rate;                // one channel: 1 where the temporal constraint was dropped
+  bool static_pair = false;          // exactly zero, no subtraction done
+  int64_t failed = 0;
+};
+
+// Frame t's buffers and the next frame's; kInvalidArgument names a missing layer.
+Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const LayeredImage& next,
+                                               const TgptSettings& settings);
+
+// The reconstruction's view of frame t: primal, dx, dy (and variances) from
+// the buffers, plus dt, dxdt, dydt when `temporal` is given (with its mask on
+// all three temporal terms).
+Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, const TemporalGradients* temporal);
+
+}  // namespace gdvr

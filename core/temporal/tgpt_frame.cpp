@@ -1,0 +1,69 @@
+#include "core/temporal/tgpt_frame.h"
+
+#include <chrono>
+
+namespace gdvr {
+
+Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const FrameRenderSettings& render,
+                                            const TgptSettings& settings, TgptPassStreams streams,
+                                            const TgptNeighbourhood& nb, const GradientFilmBuffers* reuse_a,
+                                            const FrameRenderControl& control) {
+  GDVR_RETURN_IF_ERROR(settings.validate());
+  if (!nb.at_t) return invalid_argument("render_tgpt_frame: no scene description for the frame");
+  if (reuse_a && (!nb.prev || nb.to_prev.any()))
+    return failed_precondition("render_tgpt_frame: pass A can only be reused across a static frame pair");
+  const auto start = std::chrono::steady_clock::now();
+  TgptFrameRender out;
+  FrameRenderSettings half = render;
+  half.spp = tgpt_pass_spp(render.spp);
+  if (half.time_budget_s > 0) half.time_budget_s *= 0.5;
+
+  // ---- Pass A (stream s(t)): the replayed offset of the previous frame's pass B ----
+  FrameRenderControl control_a = control, control_b = control;
+  if (control.on_progress) {
+    control_a.on_progress = [&](double f) { control.on_progress(0.5 * f); };
+    control_b.on_progress = [&](double f) { control.on_progress(0.5 + 0.5 * f); };
+  }
+  if (reuse_a) {
+    out.a = *reuse_a;
+    out.reused_pass_a = true;
+  } else {
+    auto a = render_frame_gpt(scene, half, settings.gpt, streams.a, control_a);
+    if (!a.ok()) return a.status().with_context("pass A: ");
+    out.a = std::move(a->buffers);
+    out.rays += a->rays;
+    out.invalid_samples += a->invalid_samples;
+    out.spp += a->spp;
+    if (nb.prev && nb.to_prev.any()) out.temporal_rays += a->rays;
+  }
+  // ---- Pass B (stream s(t_next)): replayed by the next frame's pass A ----
+  auto b = render_frame_gpt(scene, half, settings.gpt, streams.b, control_b);
+  if (!b.ok()) return b.status().with_context("pass B: ");
+  out.b = std::move(b->buffers);
+  out.rays += b->rays;
+  out.invalid_samples += b->invalid_samples;
+  out.spp += b->spp;
+  if (out.reused_pass_a) out.spp += b->spp;
+
+  // ---- Motion vectors, only towards neighbours that differ ----
+  if (nb.next && nb.to_next.any()) {
+    out.forward = compute_motion_field(scene, *nb.at_t, *nb.next, render.width, render.height, render.threads);
+    out.rays += out.forward.rays;
+    out.temporal_rays += out.forward.rays;
+  }
+  if (nb.prev && nb.to_prev.any()) {
+    out.backward = compute_motion_field(scene, *nb.at_t, *nb.prev, render.width, render.height, render.threads);
+    out.rays += out.backward.rays;
+    out.temporal_rays += out.backward.rays;
+  }
+  if (!nb.next)
+    out.left_out.push_back("temporal offsets: last frame of the shot (no next frame)");
+  else if (!nb.to_next.any())
+    out.left_out.push_back("temporal offsets and motion vectors: static frame pair (nothing changes towards the next frame)");
+  if (out.reused_pass_a)
+    out.left_out.push_back("pass A: equals the previous frame's pass B (static pair, same random numbers), copied");
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace gdvr

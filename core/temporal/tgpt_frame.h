@@ -1,0 +1,56 @@
+// Stage 1 of T-GPT for one frame (REFERENCE.md §4): two half-spp G-PT passes
+// with the streams of core/temporal/pass_schedule.h, and the motion fields
+// towards the neighbouring frames where the frame pair changes. Everything
+// stage 2 needs (the temporal gradients are differences between this frame's
+// pass B and the next frame's pass A) is in the returned buffers, so a farm can
+// render frames in separate processes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/gradient/gpt_integrator.h"
+#include "core/render/frame_scene.h"
+#include "core/temporal/change_detection.h"
+#include "core/temporal/motion_vectors.h"
+#include "core/temporal/pass_schedule.h"
+#include "core/temporal/tgpt_settings.h"
+
+namespace gdvr {
+
+// The frame's animated description and its neighbours in the job (null at the
+// shot's ends), with what changes towards each.
+struct TgptNeighbourhood {
+  const Scene* at_t = nullptr;
+  const Scene* prev = nullptr;
+  const Scene* next = nullptr;
+  FramePairChanges to_prev, to_next;  // detect_changes(prev, t), detect_changes(t, next)
+};
+
+struct TgptFrameRender {
+  GradientFilmBuffers a, b;  // the two half passes
+  MotionField forward;       // towards the next frame; empty when the pair is static or at the shot's end
+  MotionField backward;      // towards the previous frame; likewise
+  int spp = 0;               // both passes together
+  uint64_t rays = 0;         // every ray this call traced (passes and motion vectors)
+  // Rays whose results enter a non-zero temporal gradient: the motion-vector
+  // rays, plus pass A's rays when the pair (prev, t) changes (pass A is the
+  // replayed offset of the previous frame's dt). A static shot counts zero.
+  uint64_t temporal_rays = 0;
+  uint64_t invalid_samples = 0;
+  bool reused_pass_a = false;  // pass A taken from the previous frame's pass B (static pair)
+  double seconds = 0;
+  std::vector<std::string> left_out;  // what was skipped, and why
+};
+
+// Renders frame t of a shot. `reuse_a`, when non-null, must be pass B of the
+// previous frame and the pair (prev, t) must be static: then it equals pass A
+// of t sample for sample (same stream, same scene) and is copied instead of
+// rendered.
+Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const FrameRenderSettings& render,
+                                            const TgptSettings& settings, TgptPassStreams streams,
+                                            const TgptNeighbourhood& nb, const GradientFilmBuffers* reuse_a,
+                                            const FrameRenderControl& control);
+
+}  // namespace gdvr

@@ -1,0 +1,42 @@
+// Options of the temporal gradient-domain path tracer (T-GPT, Manzi et al.
+// 2016, REFERENCE.md §4, §5): the spatial G-PT options of each half pass, how
+// temporal constraints follow motion, and the sliding-window reconstruction.
+// Validated once before a job; printable for logs.
+#pragma once
+
+#include <string>
+
+#include "core/gradient/gpt_settings.h"
+#include "core/recon/recon_settings.h"
+#include "core/util/status.h"
+
+namespace gdvr {
+
+struct TgptSettings {
+  // The spatial sampler of both half passes (its `recon` is ignored: the
+  // window solve below uses `recon`).
+  GptSettings gpt = GptSettings::defaults_for(ShiftMapping::kReconnect);
+
+  // ---- Motion vectors (primary-hit reprojection, REFERENCE.md §4) ----
+  // Off: every temporal constraint is kept (same-pixel dt is unbiased anyway).
+  bool motion_vectors = true;
+  // Forward/backward consistency: |m_fwd(p) + m_bwd(p + m_fwd(p))| ≤ this, per
+  // axis, in whole pixels (±1 px in the public code).
+  int consistency_tolerance_px = 1;
+  // Our dt is the same-pixel difference I_{t+1}(p) − I_t(p) (the H_dt of
+  // core/recon), so the replay pair is only correlated while the surface seen
+  // through p moves by at most this many whole pixels; beyond it the
+  // constraint is dropped (docs/tgpt.md, "dt and motion"). < 0: no limit.
+  int max_same_pixel_motion_px = 1;
+
+  // ---- Sliding-window reconstruction (REFERENCE.md §5) ----
+  ReconSettings recon;
+  int window = 20;  // W ≥ 1; W = 1 is spatial G-PT
+  int hop = 0;      // H, frames between window starts; 0 = max(1, W/2)
+  int effective_hop() const { return hop > 0 ? hop : (window / 2 > 0 ? window / 2 : 1); }
+
+  Status validate() const;  // names the offending field
+  std::string to_string() const;
+};
+
+}  // namespace gdvr

@@ -1,0 +1,361 @@
+// Benchmark of T-GPT (docs/tgpt.md, issue 4):
+// - quality: on the demo animation (scenes/demo/demo_job.json, reduced
+//   resolution), relMSE per frame (per-pixel and global, REFERENCE.md §7)
+//   against a converged PT sequence, and temporal flicker (mean squared
+//   frame-to-frame change of result − reference), for PT, frame-by-frame G-PT
+//   (L2) and T-GPT (L2, W-frame window) at equal total wall time: each
+//   method's spp is chosen from a calibration run so that its whole job
+//   (render + reconstruction) takes the T-GPT job's time; medians over runs;
+// - recon: stage 2 of T-GPT (temporal gradients from pass buffers, the
+//   W-frame sliding-window solve, Hann blend) on synthetic 1280×720 buffers,
+//   streamed over a shot of --shot frames: seconds per output frame and peak
+//   RSS (run twice with different --shot to see memory is constant).
+//
+//   gdvr-bench-tgpt --quality [--res 64] [--frames 24] [--spp 8] [--ref-spp 2048] [--runs 3] [--window 20]
+//   gdvr-bench-tgpt --recon [--width 1280 --height 720] [--shot 40] [--window 20] [--method l2]
+// Run from the repository root (or pass --demo PATH to the job file).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/job/job_runner.h"
+#include "core/recon/recon_settings.h"
+#include "core/temporal/stream_schedule.h"
+#include "core/temporal/temporal_buffers.h"
+#include "core/temporal/temporal_window.h"
+
+namespace {
+
+using namespace gdvr;
+using Clock = std::chrono::steady_clock;
+
+struct Args {
+  bool quality = false, recon = false;
+  std::string demo = "scenes/demo/demo_job.json";
+  int res = 64, frames = 24, spp = 8, ref_spp = 2048, runs = 3, window = 20, threads = 2;
+  int width = 1280, height = 720, shot = 40;
+  std::string method = "l2";
+};
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double peak_rss_mib() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return -1;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+// ---- Quality at equal time ----
+
+struct SequenceRun {
+  std::vector<Image> frames;
+  double seconds = 0, recon_seconds = 0;
+  int spp = 0;
+};
+
+Expected<SequenceRun> run_sequence(JobSpec job, const std::string& base_dir, int threads) {
+  JobRunOptions options;
+  options.base_dir = base_dir;
+  options.threads = threads;
+  SequenceRun run;
+  JobCallbacks cb;
+  cb.on_frame_final = [&](const FrameOutput& f) {
+    run.frames.push_back(f.image.find("")->image);
+    run.recon_seconds += f.stats.reconstruct_seconds;
+    run.spp = f.stats.spp;
+  };
+  const auto t0 = Clock::now();
+  Status st = run_job(job, options, cb, nullptr);
+  if (!st.ok()) return st;
+  run.seconds = seconds_since(t0);
+  return run;
+}
+
+struct Errors {
+  std::vector<double> rel_mse;  // per-pixel form, per frame
+  double rel_mse_mean = 0, global_rel_mse = 0, flicker = 0;
+};
+
+Errors errors(const std::vector<Image>& img, const std::vector<Image>& ref) {
+  Errors e;
+  double num = 0, den = 0;
+  for (size_t t = 0; t < img.size(); ++t) {
+    double s = 0;
+    const auto& a = img[t].data();
+    const auto& r = ref[t].data();
+    for (size_t k = 0; k < a.size(); ++k) {
+      const double d = double(a[k]) - r[k];
+      s += d * d / (double(r[k]) * r[k] + 0.01);
+      num += d * d;
+      den += double(r[k]) * r[k];
+    }
+    e.rel_mse.push_back(s / double(a.size()));
+    e.rel_mse_mean += e.rel_mse.back() / double(img.size());
+  }
+  e.global_rel_mse = den > 0 ? num / den : 0;
+  // Flicker (REFERENCE.md §7): mean squared frame-to-frame change of the error.
+  for (size_t t = 0; t + 1 < img.size(); ++t) {
+    double s = 0;
+    for (size_t k = 0; k < img[t].data().size(); ++k) {
+      const double d = (double(img[t + 1].data()[k]) - ref[t + 1].data()[k]) - (double(img[t].data()[k]) - ref[t].data()[k]);
+      s += d * d;
+    }
+    e.flicker += s / double(img[t].data().size()) / double(img.size() - 1);
+  }
+  return e;
+}
+
+int quality(const Args& a) {
+  std::ifstream f(a.demo);
+  if (!f) {
+    std::fprintf(stderr, "cannot read %s (run from the repository root or pass --demo)\n", a.demo.c_str());
+    return 1;
+  }
+  std::stringstream ss;
+  ss << f.rdbuf();
+  auto parsed = parse_job_json(ss.str(), a.demo);
+  if (!parsed.ok()) {
+    std::fprintf(stderr, "%s\n", parsed.status().to_string().c_str());
+    return 1;
+  }
+  const std::string base_dir = a.demo.substr(0, a.demo.find_last_of('/'));
+  JobSpec base = parsed.value();
+  base.width = base.height = a.res;
+  base.frames = "0-" + std::to_string(a.frames - 1);
+  base.reconstruction.method = "l2";
+  base.reconstruction.window = a.window;
+
+  std::printf("demo animation at %dx%d, %d frames, window %d, %d threads\n", a.res, a.res, a.frames, a.window,
+              a.threads);
+  JobSpec ref_job = base;
+  ref_job.integrator = "pt";
+  ref_job.spp = a.ref_spp;
+  ref_job.seed = 987654321;
+  auto ref = run_sequence(ref_job, base_dir, a.threads);
+  if (!ref.ok()) {
+    std::fprintf(stderr, "%s\n", ref.status().to_string().c_str());
+    return 1;
+  }
+  std::printf("reference: PT %d spp, %.1f s\n", a.ref_spp, ref->seconds);
+
+  // ---- Calibrate: seconds per spp (render) and the fixed reconstruction cost per method ----
+  const std::vector<std::string> methods = {"tgpt", "gpt", "pt"};
+  std::map<std::string, double> per_spp, fixed;
+  for (const std::string& m : methods) {
+    JobSpec job = base;
+    job.integrator = m;
+    job.spp = a.spp;
+    job.seed = 17;
+    auto r = run_sequence(job, base_dir, a.threads);
+    if (!r.ok()) {
+      std::fprintf(stderr, "%s: %s\n", m.c_str(), r.status().to_string().c_str());
+      return 1;
+    }
+    fixed[m] = r->recon_seconds;
+    per_spp[m] = std::max(1e-6, r->seconds - r->recon_seconds) / a.spp;
+    std::printf("calibration %-4s: %d spp %.2f s (reconstruction %.2f s)\n", m.c_str(), a.spp, r->seconds,
+                r->recon_seconds);
+  }
+  const double budget = fixed["tgpt"] + per_spp["tgpt"] * a.spp;
+  std::map<std::string, int> spp;
+  for (const std::string& m : methods)
+    spp[m] = std::max(m == "tgpt" ? 2 : 1, int(std::lround((budget - fixed[m]) / per_spp[m])));
+  spp["tgpt"] = a.spp;
+
+  std::map<std::string, std::vector<double>> rel, glob, flick, secs;
+  std::map<std::string, std::vector<std::vector<double>>> per_frame;
+  for (int run = 0; run < a.runs; ++run)
+    for (const std::string& m : methods) {
+      JobSpec job = base;
+      job.integrator = m;
+      job.spp = spp[m];
+      job.seed = 1000 + 31 * uint64_t(run);
+      auto r = run_sequence(job, base_dir, a.threads);
+      if (!r.ok()) {
+        std::fprintf(stderr, "%s: %s\n", m.c_str(), r.status().to_string().c_str());
+        return 1;
+      }
+      Errors e = errors(r->frames, ref->frames);
+      rel[m].push_back(e.rel_mse_mean);
+      glob[m].push_back(e.global_rel_mse);
+      flick[m].push_back(e.flicker);
+      secs[m].push_back(r->seconds);
+      per_frame[m].push_back(e.rel_mse);
+      std::printf("run %d %-4s %3d spp: %.2f s  relMSE %.5f  global %.5f  flicker %.3e\n", run, m.c_str(), r->spp,
+                  r->seconds, e.rel_mse_mean, e.global_rel_mse, e.flicker);
+    }
+  std::printf("\n| method | spp | wall s (median) | relMSE per-pixel | relMSE global | flicker | relMSE / T-GPT's | flicker / T-GPT's |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (const std::string& m : methods)
+    std::printf("| %s | %d | %.2f | %.5f | %.5f | %.3e | %.2f | %.2f |\n", m.c_str(), spp[m], median(secs[m]),
+                median(rel[m]), median(glob[m]), median(flick[m]), median(rel[m]) / median(rel["tgpt"]),
+                median(flick[m]) / median(flick["tgpt"]));
+  std::printf("\nper-frame relMSE (per-pixel form), median over runs:\nframe");
+  for (const std::string& m : methods) std::printf(" %8s", m.c_str());
+  std::printf("\n");
+  for (int t = 0; t < a.frames; ++t) {
+    std::printf("%5d", t);
+    for (const std::string& m : methods) {
+      std::vector<double> v;
+      for (const auto& run : per_frame[m]) v.push_back(run[size_t(t)]);
+      std::printf(" %8.5f", median(v));
+    }
+    std::printf("\n");
+  }
+  return 0;
+}
+
+// ---- Stage 2 throughput on synthetic buffers ----
+
+LayeredImage synthetic_frame(int w, int h, int t, int n, std::mt19937& rng) {
+  std::normal_distribution<float> noise(0.0f, 0.1f), gnoise(0.0f, 0.03f);
+  auto field = [&](int x, int y, int f) {
+    const float u = float(x) / w, v = float(y) / h, s = 0.02f * f;
+    return 0.5f + 0.3f * std::sin(6.0f * (u + s)) * std::cos(4.0f * v) + ((u + s) > 0.5f ? 0.2f : 0.0f);
+  };
+  LayeredImage L;
+  const std::vector<std::string> rgb = {"R", "G", "B"};
+  for (int pass = 0; pass < 2; ++pass) {
+    // Pass A of frame t is the replay of pass B of t−1: both sample frame t here.
+    Image p(w, h, 3), dx(w, h, 3), dy(w, h, 3), var(w, h, 3);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const float i0 = field(x, y, t);
+          p.at(x, y, c) = i0 + noise(rng);
+          dx.at(x, y, c) = (x + 1 < w ? field(x + 1, y, t) - i0 : 0.0f) + gnoise(rng);
+          dy.at(x, y, c) = (y + 1 < h ? field(x, y + 1, t) - i0 : 0.0f) + gnoise(rng);
+          var.at(x, y, c) = 0.01f;
+        }
+    const std::string pre = pass == 0 ? "a_" : "b_";
+    L.add(pre + "primal", rgb, std::move(p));
+    L.add(pre + "dx", rgb, std::move(dx));
+    L.add(pre + "dy", rgb, std::move(dy));
+    L.add(pre + "primal_var", rgb, var);
+    L.add(pre + "dx_var", rgb, var);
+    L.add(pre + "dy_var", rgb, std::move(var));
+  }
+  // Averages under the G-PT names, as tgpt_frame_layers stores them.
+  for (const char* n : {"primal", "dx", "dy"}) {
+    Image avg = L.find(std::string("a_") + n)->image;
+    const Image& b = L.find(std::string("b_") + n)->image;
+    for (size_t k = 0; k < avg.data().size(); ++k) avg.data()[k] = 0.5f * (avg.data()[k] + b.data()[k]);
+    L.add(n, rgb, std::move(avg));
+    Image v(w, h, 3);
+    for (float& x : v.data()) x = 0.005f;
+    L.add(std::string(n) + "_var", rgb, std::move(v));
+  }
+  L.add("direct", rgb, Image(w, h, 3));
+  Image motion(w, h, 3);
+  for (int k = 0; k < w * h; ++k) motion.data()[size_t(k) * 3 + 2] = 1.0f;
+  if (t + 1 < n) L.add("motion", {"X", "Y", "V"}, motion);
+  if (t > 0) L.add("motion_back", {"X", "Y", "V"}, std::move(motion));
+  return L;
+}
+
+int recon(const Args& a) {
+  TgptSettings s;
+  s.window = a.window;
+  auto method = parse_recon_method(a.method);
+  if (!method.ok()) {
+    std::fprintf(stderr, "%s\n", method.status().to_string().c_str());
+    return 1;
+  }
+  s.recon.method = method.value();
+  s.max_same_pixel_motion_px = -1;
+  const int n = a.shot;
+  std::vector<int> todo;
+  std::vector<std::vector<int>> needs;
+  for (int f = 0; f < n; ++f) {
+    todo.push_back(f);
+    needs.push_back(positions_needed(n, s.window, 0, f));
+  }
+  StreamSchedule schedule(todo, needs);
+  TemporalWindowCache cache(s, n);
+  std::map<int, LayeredImage> buffers;
+  std::mt19937 rng(1234);
+  double solve_seconds = 0, gen_seconds = 0;
+  int emitted = 0;
+  const auto t0 = Clock::now();
+  for (int f : schedule.render_order()) {
+    const auto g0 = Clock::now();
+    buffers[f] = synthetic_frame(a.width, a.height, f, n, rng);
+    gen_seconds += seconds_since(g0);
+    schedule.rendered(f);
+    for (int r = schedule.ready(); r >= 0; r = schedule.ready()) {
+      const auto s0 = Clock::now();
+      auto img = cache.reconstruct(r, [&](int p) -> const LayeredImage* {
+        auto it = buffers.find(p);
+        return it == buffers.end() ? nullptr : &it->second;
+      }, nullptr);
+      if (!img.ok()) {
+        std::fprintf(stderr, "%s\n", img.status().to_string().c_str());
+        return 1;
+      }
+      if (r + 1 < n) {  // the output's own dt layers, as finalize does
+        auto tg = temporal_gradients(buffers.at(r), buffers.at(r + 1), s);
+        if (!tg.ok()) return 1;
+      }
+      solve_seconds += seconds_since(s0);
+      cache.release_before(r + 1);
+      schedule.finalized();
+      ++emitted;
+    }
+    for (int d : schedule.releasable()) buffers.erase(d);
+  }
+  const double total = seconds_since(t0);
+  std::printf("stage 2 %s, %dx%d, shot %d frames, window %d (hop %d): %d windows, %.2f s per output frame "
+              "(stage 2 only; %.1f s total incl. %.1f s synthesising buffers), max buffered frames %d, peak RSS %.0f MiB\n",
+              a.method.c_str(), a.width, a.height, n, s.window, s.effective_hop(), cache.windows_solved(),
+              solve_seconds / emitted, total, gen_seconds, schedule.max_buffered(), peak_rss_mib());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    std::string k = argv[i];
+    auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
+    if (k == "--quality") a.quality = true;
+    else if (k == "--recon") a.recon = true;
+    else if (k == "--demo") a.demo = next();
+    else if (k == "--res") a.res = std::stoi(next());
+    else if (k == "--frames") a.frames = std::stoi(next());
+    else if (k == "--spp") a.spp = std::stoi(next());
+    else if (k == "--ref-spp") a.ref_spp = std::stoi(next());
+    else if (k == "--runs") a.runs = std::stoi(next());
+    else if (k == "--window") a.window = std::stoi(next());
+    else if (k == "--threads") a.threads = std::stoi(next());
+    else if (k == "--width") a.width = std::stoi(next());
+    else if (k == "--height") a.height = std::stoi(next());
+    else if (k == "--shot") a.shot = std::stoi(next());
+    else if (k == "--method") a.method = next();
+    else {
+      std::fprintf(stderr, "unknown argument %s\n", k.c_str());
+      return 2;
+    }
+  }
+  if (!a.quality && !a.recon) a.quality = true;
+  int rc = 0;
+  if (a.quality) rc |= quality(a);
+  if (a.recon) rc |= recon(a);
+  return rc;
+}

@@ -1,0 +1,164 @@
+// Statistical test of the temporal estimators: over independent seeds, the
+// mean of dt, dxdt, dydt equals the finite difference of converged PT frames
+// (REFERENCE.md §4), on the demo scene with a moving box and camera; and the
+// frame renderer counts zero temporal rays across static pairs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "core/job/job_runner.h"
+#include "core/render/frame_scene.h"
+#include "core/scene/mitsuba_loader.h"
+#include "core/temporal/temporal_buffers.h"
+#include "core/temporal/tgpt_frame.h"
+
+namespace gdvr {
+namespace {
+
+constexpr int kRes = 16;
+
+JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed) {
+  JobSpec job;
+  job.scene = "cbox_demo.xml";
+  job.frames = "0,6";  // consecutive frames of the job, a quarter second apart: a clear change
+  job.fps = 24;
+  job.width = job.height = kRes;
+  job.spp = spp;
+  job.seed = seed;
+  job.integrator = integrator;
+  job.reconstruction.method = "l2";
+  Track box;
+  box.target = "smallbox";
+  box.keys = {Keyframe{0.0, Transform()}, Keyframe{1.0, Transform::translate({-70, 0, -60})}};
+  job.animation.tracks.push_back(box);
+  return job;
+}
+
+std::map<int, FrameBuffers> render(const JobSpec& job) {
+  JobRunOptions options;
+  options.base_dir = std::string(GDVR_SOURCE_DIR) + "/scenes/demo";
+  options.threads = 2;
+  std::map<int, FrameBuffers> out;
+  Status st = render_job_buffers(job, options, {0, 6}, [&](FrameBuffers&& b) {
+    out[b.frame] = std::move(b);
+    return Status::Ok();
+  }, nullptr, nullptr);
+  EXPECT_TRUE(st.ok()) << st.to_string();
+  return out;
+}
+
+TEST(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
+  // ---- Converged reference: PT, indirect part (color − direct), 2048 spp ----
+  auto ref = render(moving_job("pt", 2048, 77));
+  ASSERT_EQ(ref.size(), 2u);
+  auto indirect = [&](int f, int x, int y, int c) {
+    return double(ref[f].layers.find("")->image.at(x, y, c)) - ref[f].layers.find("direct")->image.at(x, y, c);
+  };
+  auto ref_var = [&](int f, int x, int y, int c) { return double(ref[f].layers.find("variance")->image.at(x, y, c)); };
+  // Reference terms: dt = I1 − I0, dxdt = dx1 − dx0, dydt = dy1 − dy0, with variances.
+  const size_t n = size_t(kRes) * kRes * 3;
+  std::vector<double> fd(3 * n, 0.0), fd_var(3 * n, 0.0);
+  std::vector<bool> defined(3 * n, false);
+  for (int y = 0; y < kRes; ++y)
+    for (int x = 0; x < kRes; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const size_t k = (size_t(y) * kRes + x) * 3 + c;
+        fd[k] = indirect(6, x, y, c) - indirect(0, x, y, c);
+        fd_var[k] = ref_var(6, x, y, c) + ref_var(0, x, y, c);
+        defined[k] = true;
+        for (int axis = 0; axis < 2; ++axis) {
+          const int x1 = x + (axis == 0), y1 = y + (axis == 1);
+          if (x1 >= kRes || y1 >= kRes) continue;
+          const size_t kk = (axis + 1) * n + k;
+          fd[kk] = (indirect(6, x1, y1, c) - indirect(6, x, y, c)) - (indirect(0, x1, y1, c) - indirect(0, x, y, c));
+          fd_var[kk] = ref_var(6, x1, y1, c) + ref_var(6, x, y, c) + ref_var(0, x1, y1, c) + ref_var(0, x, y, c);
+          defined[kk] = true;
+        }
+      }
+
+  // ---- T-GPT over independent seeds; motion masks off so every pixel is sampled ----
+  TgptSettings settings;
+  settings.motion_vectors = false;
+  constexpr int kSeeds = 12;
+  std::vector<double> sum(3 * n, 0.0), sum_sq(3 * n, 0.0);
+  double moved = 0;
+  for (int s = 0; s < kSeeds; ++s) {
+    auto b = render(moving_job("tgpt", 32, 1000 + 7919 * uint64_t(s)));
+    ASSERT_EQ(b.size(), 2u);
+    auto tg = temporal_gradients(b[0].layers, b[6].layers, settings);
+    ASSERT_TRUE(tg.ok()) << tg.status().to_string();
+    ASSERT_FALSE(tg->static_pair);
+    const Image* terms[3] = {&tg->dt, &tg->dxdt, &tg->dydt};
+    for (int t = 0; t < 3; ++t)
+      for (size_t k = 0; k < n; ++k) {
+        const double v = terms[t]->data()[k];
+        ASSERT_TRUE(std::isfinite(v));
+        sum[t * n + k] += v;
+        sum_sq[t * n + k] += v * v;
+      }
+  }
+  for (size_t k = 0; k < n; ++k) moved += std::abs(fd[k]);
+  EXPECT_GT(moved, 1e-3) << "the test needs a visible change between the frames";
+  for (int t = 0; t < 3; ++t) {
+    double z2 = 0, sum_d = 0, sum_v = 0;
+    int count = 0;
+    for (size_t k = t * n; k < (t + 1) * n; ++k) {
+      if (!defined[k]) continue;
+      const double mean = sum[k] / kSeeds;
+      const double var = std::max(0.0, (sum_sq[k] - kSeeds * mean * mean) / (kSeeds - 1)) / kSeeds;
+      const double d = mean - fd[k], v = var + fd_var[k];
+      if (!(v > 1e-12)) {
+        EXPECT_NEAR(d, 0.0, 1e-4);
+        continue;
+      }
+      z2 += d * d / v;
+      sum_d += d;
+      sum_v += v;
+      ++count;
+    }
+    z2 /= std::max(1, count);
+    const double agg = sum_v > 0 ? sum_d / std::sqrt(sum_v) : 0;
+    std::printf("[ temporal ] %s: mean z^2 %.3f over %d, aggregate z %.2f\n", t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt",
+                z2, count, agg);
+    // Student t with 11 dof: E[z^2] = 11/9; a biased estimator shows as a clear excess.
+    EXPECT_LT(z2, 1.8);
+    EXPECT_LT(std::abs(agg), 4.5);
+  }
+}
+
+// The frame renderer's ray accounting: zero temporal rays across static pairs.
+TEST(TemporalGradientTest, StaticNeighboursTraceNoTemporalRays) {
+  LoadOptions load;
+  load.params = {{"res", std::to_string(kRes)}};
+  auto desc = load_mitsuba_scene(std::string(GDVR_SOURCE_DIR) + "/scenes/demo/cbox_demo.xml", load);
+  ASSERT_TRUE(desc.ok());
+  auto fs = FrameScene::create(desc.value(), {});
+  ASSERT_TRUE(fs.ok());
+  FrameRenderSettings rs;
+  rs.width = rs.height = kRes;
+  rs.spp = 2;
+  rs.threads = 2;
+  TgptSettings settings;
+  TgptNeighbourhood nb;
+  nb.at_t = nb.prev = nb.next = &desc.value();
+  auto r = render_tgpt_frame(*fs.value(), rs, settings, {1, 2}, nb, nullptr, {});
+  ASSERT_TRUE(r.ok()) << r.status().to_string();
+  EXPECT_EQ(r->temporal_rays, 0u);
+  EXPECT_GT(r->rays, 0u);
+  EXPECT_TRUE(r->forward.offsets.empty());
+  EXPECT_TRUE(r->backward.offsets.empty());
+
+  // Moving camera towards the next frame: motion rays are temporal rays.
+  Scene next = desc.value();
+  next.camera.to_world = Transform::translate({5, 0, 0}) * next.camera.to_world;
+  nb.next = &next;
+  nb.to_next = detect_changes(desc.value(), next);
+  auto m = render_tgpt_frame(*fs.value(), rs, settings, {1, 2}, nb, nullptr, {});
+  ASSERT_TRUE(m.ok());
+  EXPECT_EQ(m->temporal_rays, uint64_t(kRes * kRes));
+  EXPECT_FALSE(m->forward.offsets.empty());
+}
+
+}  // namespace
+}  // namespace gdvr

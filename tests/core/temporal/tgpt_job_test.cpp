@@ -1,0 +1,227 @@
+// T-GPT end to end through the job runner on the demo scene at tiny sizes:
+// static shots, W = 1, short shots, streaming order, stage equality, layers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "core/job/job_runner.h"
+#include "core/recon/reconstruct.h"
+#include "core/temporal/temporal_buffers.h"
+#include "core/temporal/tgpt_frame.h"
+
+namespace gdvr {
+namespace {
+
+std::string demo_dir() { return std::string(GDVR_SOURCE_DIR) + "/scenes/demo"; }
+
+JobSpec tgpt_job(const std::string& frames, bool animated, int window) {
+  JobSpec job;
+  job.scene = "cbox_demo.xml";
+  job.frames = frames;
+  job.fps = 24;
+  job.width = job.height = 16;
+  job.spp = 4;
+  job.seed = 5;
+  job.integrator = "tgpt";
+  job.reconstruction.method = "l2";
+  job.reconstruction.window = window;
+  if (animated) {
+    Track box;
+    box.target = "smallbox";
+    box.keys = {Keyframe{0.0, Transform()}, Keyframe{1.0, Transform::translate({-70, 0, -60})}};
+    job.animation.tracks.push_back(box);
+    Track cam;
+    cam.target = "sensor";
+    Transform a, b;
+    EXPECT_TRUE(Transform::look_at({278, 273, -800}, {278, 273, -799}, {0, 1, 0}, &a));
+    EXPECT_TRUE(Transform::look_at({250, 280, -680}, {275, 265, 0}, {0, 1, 0}, &b));
+    cam.keys = {Keyframe{0.0, a}, Keyframe{2.0, b}};
+    job.animation.tracks.push_back(cam);
+  }
+  return job;
+}
+
+std::vector<FrameOutput> run(const JobSpec& job) {
+  JobRunOptions options;
+  options.base_dir = demo_dir();
+  options.threads = 2;
+  std::vector<FrameOutput> out;
+  JobCallbacks cb;
+  cb.on_frame_final = [&](const FrameOutput& f) { out.push_back(f); };
+  Status st = run_job(job, options, cb, nullptr);
+  EXPECT_TRUE(st.ok()) << st.to_string();
+  return out;
+}
+
+bool has(const std::vector<std::string>& v, const std::string& prefix) {
+  for (const auto& s : v)
+    if (s.rfind(prefix, 0) == 0) return true;
+  return false;
+}
+
+void expect_finite_layers(const FrameOutput& f) {
+  for (const ImageLayer& l : f.image.layers)
+    for (float v : l.image.data()) ASSERT_TRUE(std::isfinite(v)) << "frame " << f.frame << " layer " << l.name;
+}
+
+TEST(TgptJobTest, StaticShotHasExactlyZeroTemporalGradients) {
+  auto out = run(tgpt_job("0-3", /* animated = */ false, /* window = */ 4));
+  ASSERT_EQ(out.size(), 4u);
+  for (const FrameOutput& f : out) {
+    expect_finite_layers(f);
+    for (const char* name : {"dt", "dxdt", "dydt", "temporal_failure_rate"}) {
+      const ImageLayer* l = f.image.find(name);
+      ASSERT_NE(l, nullptr) << name;
+      for (float v : l->image.data()) ASSERT_EQ(v, 0.0f) << name << " frame " << f.frame;
+    }
+    EXPECT_TRUE(has(f.stats.left_out, f.frame == 3 ? "temporal offsets: last frame" : "temporal offsets and motion vectors: static frame pair"))
+        << f.frame;
+    // Pass A of frames 1..3 is the previous pass B, copied, not rendered.
+    EXPECT_EQ(has(f.stats.left_out, "pass A: equals the previous frame's pass B"), f.frame > 0);
+  }
+}
+
+// A fully static pair traces no temporal rays; a moving one does.
+TEST(TgptJobTest, StaticPairTracesZeroTemporalRays) {
+  JobSpec job = tgpt_job("0-1", false, 2);
+  JobRunOptions options;
+  options.base_dir = demo_dir();
+  options.threads = 2;
+  // Two separate stage-1 runs (as two farm processes): frame 1's pass A is
+  // rendered, not copied from frame 0's pass B.
+  std::map<int, FrameBuffers> buffers;
+  for (int f : {0, 1})
+    ASSERT_TRUE(render_job_buffers(job, options, {f}, [&](FrameBuffers&& b) {
+                  buffers[b.frame] = std::move(b);
+                  return Status::Ok();
+                }, nullptr, nullptr).ok());
+  EXPECT_FALSE(has(buffers[1].stats.left_out, "pass A: equals"));
+  // No motion layers: stage 2 reads the pair as static and forms dt ≡ 0 without subtracting.
+  EXPECT_EQ(buffers[0].layers.find("motion"), nullptr);
+  EXPECT_EQ(buffers[1].layers.find("motion_back"), nullptr);
+  auto tg = temporal_gradients(buffers[0].layers, buffers[1].layers, TgptSettings{});
+  ASSERT_TRUE(tg.ok());
+  EXPECT_TRUE(tg->static_pair);
+  // In a static pair B_0 and A_1 are the same estimate (same scene, same numbers).
+  EXPECT_EQ(buffers[0].layers.find("b_primal")->image.data(), buffers[1].layers.find("a_primal")->image.data());
+}
+
+TEST(TgptJobTest, StaticShotEqualsReconstructingWithZeroDt) {
+  JobSpec job = tgpt_job("0-2", false, 3);
+  auto out = run(job);
+  ASSERT_EQ(out.size(), 3u);
+  GradientWindow window;
+  for (const FrameOutput& f : out) {
+    GradientFrame gf;
+    for (auto [t, n] : {std::pair<Term, const char*>{Term::kPrimal, "primal"}, {Term::kDx, "dx"}, {Term::kDy, "dy"}}) {
+      gf.buffer(t) = f.image.find(n)->image;
+      gf.variance(t) = f.image.find(std::string(n) + "_var")->image;
+    }
+    for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt}) {
+      gf.buffer(t) = Image(16, 16, 3);  // dt = 0
+      gf.variance(t) = Image(16, 16, 3);
+    }
+    window.frames.push_back(std::make_shared<const GradientFrame>(std::move(gf)));
+  }
+  ReconSettings rs;
+  rs.method = ReconMethod::kL2;
+  rs.alpha = job.reconstruction.alpha;
+  auto solved = reconstruct(window, rs);
+  ASSERT_TRUE(solved.ok());
+  for (size_t i = 0; i < out.size(); ++i) {
+    const Image& fin = out[i].image.find("")->image;
+    const Image& direct = out[i].image.find("direct")->image;
+    // Equal up to the Hann blend's normalisation w·x·(1/w) (one rounding).
+    for (size_t k = 0; k < fin.data().size(); ++k)
+      ASSERT_NEAR(fin.data()[k], solved->frames[i].data()[k] + direct.data()[k],
+                  1e-6f * (1.0f + std::abs(fin.data()[k]))) << "frame " << i;
+  }
+}
+
+TEST(TgptJobTest, WindowOfOneIsSpatialGpt) {
+  JobSpec job = tgpt_job("0-2", true, 1);
+  auto out = run(job);
+  ASSERT_EQ(out.size(), 3u);
+  for (const FrameOutput& f : out) {
+    expect_finite_layers(f);
+    GradientFrame gf;
+    for (auto [t, n] : {std::pair<Term, const char*>{Term::kPrimal, "primal"}, {Term::kDx, "dx"}, {Term::kDy, "dy"}}) {
+      gf.buffer(t) = f.image.find(n)->image;
+      gf.variance(t) = f.image.find(std::string(n) + "_var")->image;
+    }
+    ReconSettings rs;
+    rs.method = ReconMethod::kL2;
+    rs.alpha = job.reconstruction.alpha;
+    auto solved = reconstruct_frame(gf, rs);
+    ASSERT_TRUE(solved.ok());
+    const Image& fin = f.image.find("")->image;
+    const Image& direct = f.image.find("direct")->image;
+    for (size_t k = 0; k < fin.data().size(); ++k)
+      ASSERT_EQ(fin.data()[k], solved->frames[0].data()[k] + direct.data()[k]) << "frame " << f.frame;
+    // The temporal layers are still sampled (and finite) for frames with a successor.
+    if (f.frame < 2) {
+      double sum = 0;
+      for (float v : f.image.find("dt")->image.data()) sum += std::abs(v);
+      EXPECT_GT(sum, 0.0);
+    }
+  }
+}
+
+TEST(TgptJobTest, TwoFrameShotAndWindowLongerThanShot) {
+  for (int window : {2, 20}) {
+    auto out = run(tgpt_job("0-1", true, window));
+    ASSERT_EQ(out.size(), 2u) << window;
+    EXPECT_EQ(out[0].frame, 0);
+    EXPECT_EQ(out[1].frame, 1);
+    for (const FrameOutput& f : out) {
+      expect_finite_layers(f);
+      for (const char* name : {"", "primal", "dx", "dy", "dt", "dxdt", "dydt", "direct", "temporal_failure_rate",
+                               "shift_failure_rate", "motion"})
+        EXPECT_NE(f.image.find(name), nullptr) << name;
+      EXPECT_EQ(f.stats.spp, 4);
+    }
+  }
+}
+
+// Frames come out in order, each as soon as its windows are rendered, and a
+// stand-alone finalize of each frame (a farm's stage 2) gives the same image.
+TEST(TgptJobTest, StreamsInOrderAndStagesAgree) {
+  JobSpec job = tgpt_job("0-6", true, 4);
+  JobRunOptions options;
+  options.base_dir = demo_dir();
+  options.threads = 2;
+  std::vector<FrameOutput> out;
+  JobCallbacks cb;
+  cb.on_frame_final = [&](const FrameOutput& f) { out.push_back(f); };
+  ASSERT_TRUE(run_job(job, options, cb, nullptr).ok());
+  ASSERT_EQ(out.size(), 7u);
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(out[size_t(i)].frame, i);
+
+  std::map<int, FrameBuffers> buffers;
+  std::vector<int> all = {0, 1, 2, 3, 4, 5, 6};
+  ASSERT_TRUE(render_job_buffers(job, options, all, [&](FrameBuffers&& b) {
+                buffers[b.frame] = std::move(b);
+                return Status::Ok();
+              }, nullptr, nullptr).ok());
+  for (int f : all) {
+    std::map<int, FrameBuffers> needed;
+    for (int k : frames_needed_to_finalize(job, all, f)) needed[k] = buffers[k];
+    EXPECT_LE(needed.size(), 4u + 2u + 1u);
+    auto fin = finalize_frame(job, f, needed);
+    ASSERT_TRUE(fin.ok()) << fin.status().to_string();
+    const auto& a = fin->image.find("")->image.data();
+    const auto& b = out[size_t(f)].image.find("")->image.data();
+    ASSERT_EQ(a, b) << "frame " << f;
+    // Missing buffers are an error naming the frame, not a crash.
+    std::map<int, FrameBuffers> partial = needed;
+    partial.erase(partial.rbegin()->first);
+    EXPECT_FALSE(finalize_frame(job, f, partial).ok());
+  }
+  // Moving pairs carry motion fields and count temporal failures somewhere.
+  EXPECT_NE(buffers[0].layers.find("motion"), nullptr);
+  EXPECT_NE(buffers[1].layers.find("motion_back"), nullptr);
+}
+
+}  // namespace
+}  // namespace gdvr
