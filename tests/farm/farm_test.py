@@ -13,6 +13,10 @@
              the Indexed Job's completions match its job's chunk count.
   systemd    deploy/systemd/gdvr-server.service passes systemd-analyze verify
              with no warning about it.
+  openjd, opencue, flamenco
+             deploy/farm's templates, run by stand-ins for each manager
+             (OpenJD's own reference runtime; pyoutline/RQD and the Flamenco
+             job compiler emulated), give the single-process frames.
 
 A check that cannot run fails: nothing here skips.
 """
@@ -316,9 +320,198 @@ def systemd(args):
     check(used <= defined, f"gdvr-server.conf defines every variable the unit uses (missing: {used - defined})")
 
 
+# ---- farm-manager templates, run by stand-ins for the managers ----
+
+def template_job(args, work):
+    """A 6-frame job, its single-process reference frames, and the folders."""
+    work = fresh(work)
+    job = write_job(args.source, work / "job.json", frames="0-5", width=24, height=24, spp=2)
+    ref = run([args.render, job, "--out", work / "ref", "--threads", "1"])
+    check(ref.returncode == 0, "gdvr-render single-process reference")
+    return work, job
+
+
+def compare_to_reference(work, out, who):
+    for f in range(6):
+        name = f"frame_{f:04d}.exr"
+        check(same_bytes(out / name, work / "ref" / name), f"{who}: {name} equals the single-process frame")
+    check((out / "video.mp4").exists(), f"{who}: video.mp4 written")
+
+
+def run_concurrently(commands, who):
+    procs = [subprocess.Popen([str(c) for c in cmd], stderr=subprocess.PIPE, text=True) for cmd in commands]
+    results = [(p.wait(), p.stderr.read()) for p in procs]
+    for rc, err in results:
+        if rc:
+            print(err)
+    return check(all(rc == 0 for rc, _ in results), f"{who}: {len(commands)} task(s) succeed")
+
+
+def openjd(args):
+    """deploy/farm/openjd: `openjd check`, then the OpenJD reference runtime
+    (openjd run) executes every Render chunk and Finalize locally."""
+    work, job = template_job(args, args.work)
+    venv = args.work.parent / (args.work.name + "-venv")
+    openjd_cli = venv / "bin/openjd"
+    if not openjd_cli.exists():
+        made = run([sys.executable, "-m", "venv", venv])
+        pip = made.returncode == 0 and run([venv / "bin/python", "-m", "pip", "install", "--quiet",
+                                            "--disable-pip-version-check", "openjd-cli==0.8.0"])
+        if not check(made.returncode == 0 and pip.returncode == 0, "pip install openjd-cli into a venv"):
+            print(made.stderr, pip and pip.stderr)
+            return
+    template = args.source / "deploy/farm/openjd/gdvr-job.template.yaml"
+    r = run([openjd_cli, "check", template])
+    check(r.returncode == 0, "openjd check gdvr-job.template.yaml")
+    r = run([openjd_cli, "run", template, "--step", "Finalize", "--run-dependencies",
+             "-p", f"JobFile={job}", "-p", "Frames=0-5", "-p", "ChunkSize=2", "-p", f"FarmDir={work / 'farm'}",
+             "-p", f"GdvrFarm={args.farm}", "-p", "Threads=1"])
+    chunks = re.findall(r"Frame\(CHUNK\[INT\]\) = (\S+)", r.stdout + r.stderr)
+    check(r.returncode == 0 and chunks == ["0-1", "2-3", "4-5"], f"openjd run: Render chunks {chunks} + Finalize")
+    if r.returncode:
+        print(r.stdout[-3000:], r.stderr[-3000:])
+    compare_to_reference(work, work / "farm/output", "OpenJD")
+
+
+OUTLINE_STUB = {
+    "outline/__init__.py": """
+import json, os
+class Outline:
+    def __init__(self, name, **kw):
+        self.name, self.kw, self.layers = name, kw, []
+    def add_layer(self, layer):
+        self.layers.append(layer)
+""",
+    "outline/cuerun.py": """
+import json, os
+def launch(ol, use_pycuerun=True, **kw):
+    json.dump({"use_pycuerun": use_pycuerun, "layers": [l.spec() for l in ol.layers]},
+              open(os.environ["GDVR_OUTLINE_DUMP"], "w"))
+""",
+    "outline/modules/__init__.py": "",
+    "outline/modules/shell.py": """
+class _Layer:
+    def __init__(self, name, **args):
+        self.name, self.args, self.depends = name, args, []
+    def depend_all(self, other):
+        self.depends.append(other.name)
+    def spec(self):
+        return {"name": self.name, "kind": type(self).__name__, "args": self.args, "depends": self.depends}
+class Shell(_Layer): pass
+class ShellCommand(_Layer): pass
+""",
+}
+
+
+def opencue(args):
+    """deploy/farm/opencue: the submit script runs against a stand-in for
+    pyoutline that records the layers; the test then does what Cuebot and RQD
+    do: chunk the render layer's range, substitute #FRAME_START#/#FRAME_END#,
+    run the chunks at once, then the dependent finalize layer."""
+    work, job = template_job(args, args.work)
+    stub = work / "stub"
+    for rel, text in OUTLINE_STUB.items():
+        (stub / rel).parent.mkdir(parents=True, exist_ok=True)
+        (stub / rel).write_text(text)
+    dump = work / "outline.json"
+    env = dict(os.environ, PYTHONPATH=str(stub), GDVR_OUTLINE_DUMP=str(dump))
+    r = run([sys.executable, args.source / "deploy/farm/opencue/gdvr_submit.py", job, "--frames", "0-5",
+             "--chunk", "2", "--farm-dir", work / "farm", "--show", "test", "--shot", "farm", "--gdvr-farm",
+             args.farm, "--threads", "1"], env=env)
+    if not check(r.returncode == 0 and dump.exists(), "gdvr_submit.py builds the outline"):
+        print(r.stderr)
+        return
+    spec = json.loads(dump.read_text())
+    layers = {l["name"]: l for l in spec["layers"]}
+    check(spec["use_pycuerun"] is False, "launched without pycuerun (RQD substitutes the frame tokens)")
+    check(set(layers) == {"render", "finalize"} and layers["finalize"]["depends"] == ["render"],
+          "layers: render, then finalize depending on all of render")
+    render = layers["render"]["args"]
+    frames = list(range(0, 6))  # the layer's range "0-5"
+    check(render["range"] == "0-5" and render["chunk"] == 2, "render layer: range 0-5, chunk 2")
+    commands = []
+    for i in range(0, len(frames), render["chunk"]):
+        chunk = frames[i:i + render["chunk"]]
+        commands.append([str(a).replace("#FRAME_START#", str(chunk[0])).replace("#FRAME_END#", str(chunk[-1]))
+                         for a in render["command"]])
+    if run_concurrently(commands, "OpenCue render chunks"):
+        run_concurrently([layers["finalize"]["args"]["command"]], "OpenCue finalize")
+    compare_to_reference(work, work / "farm/output", "OpenCue")
+
+
+FLAMENCO_HARNESS = r"""
+// Stand-in for the Flamenco Manager's job compiler: the globals a job type
+// script sees (author, frameChunker), then compileJob on one job.
+const fs = require("fs");
+const [script, settingsJson] = process.argv.slice(2);
+function parseFrames(text) {
+  const out = [];
+  for (const part of text.split(",")) {
+    const [a, b] = part.split("-").map(Number);
+    for (let f = a; f <= (b === undefined ? a : b); f++) out.push(f);
+  }
+  return out;
+}
+function formatFrames(frames) {
+  const runs = [];
+  for (let i = 0; i < frames.length;) {
+    let j = i;
+    while (j + 1 < frames.length && frames[j + 1] === frames[j] + 1) j++;
+    runs.push(j > i ? `${frames[i]}-${frames[j]}` : `${frames[i]}`);
+    i = j + 1;
+  }
+  return runs.join(",");
+}
+globalThis.frameChunker = (text, size) => {
+  const frames = parseFrames(text), chunks = [];
+  for (let i = 0; i < frames.length; i += size) chunks.push(formatFrames(frames.slice(i, i + size)));
+  return chunks;
+};
+globalThis.author = {
+  Task: (name, type) => ({ name, type, commands: [], deps: [],
+    addCommand(c) { this.commands.push(c); }, addDependency(t) { this.deps.push(t.name); } }),
+  Command: (name, params) => ({ name, params }),
+};
+const tasks = [];
+const fn = new Function(fs.readFileSync(script, "utf8") + "\nreturn [JOB_TYPE, compileJob];");
+const [jobType, compileJob] = fn();
+const settings = JSON.parse(settingsJson);
+for (const s of jobType.settings) if (!(s.key in settings) && "default" in s) settings[s.key] = s.default;
+compileJob({ settings, addTask: (t) => tasks.push(t) });
+console.log(JSON.stringify(tasks.map(t => ({ name: t.name, type: t.type, commands: t.commands, deps: t.deps }))));
+"""
+
+
+def flamenco(args):
+    """deploy/farm/flamenco/gdvr.js compiled by a stand-in for the Flamenco
+    Manager (node with author/frameChunker), its tasks then run in
+    dependency order the way Workers would."""
+    work, job = template_job(args, args.work)
+    node = shutil.which("node") or shutil.which("nodejs")
+    if not check(node is not None, "node is installed"):
+        return
+    harness = work / "harness.js"
+    harness.write_text(FLAMENCO_HARNESS)
+    settings = {"job_file": str(job), "frames": "0-5", "chunk_size": 2, "farm_dir": str(work / "farm"),
+                "gdvr_farm": str(args.farm), "threads": 1}
+    r = run([node, harness, args.source / "deploy/farm/flamenco/gdvr.js", json.dumps(settings)])
+    if not check(r.returncode == 0, "gdvr.js compiles a job"):
+        print(r.stderr)
+        return
+    tasks = json.loads(r.stdout)
+    names = [t["name"] for t in tasks]
+    check(names == ["render-0-1", "render-2-3", "render-4-5", "finalize"], f"tasks {names}")
+    check(tasks[-1]["deps"] == names[:-1], "finalize depends on every render task")
+    check(all(c["name"] == "exec" for t in tasks for c in t["commands"]), "every command is an exec command")
+    exe = lambda c: [c["params"]["exe"]] + c["params"]["args"]
+    if run_concurrently([exe(c) for t in tasks[:-1] for c in t["commands"]], "Flamenco render tasks"):
+        run_concurrently([exe(c) for c in tasks[-1]["commands"]], "Flamenco finalize")
+    compare_to_reference(work, work / "farm/output", "Flamenco")
+
+
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("test", choices=["localhost", "kill", "k8s", "systemd"])
+    p.add_argument("test", choices=["localhost", "kill", "k8s", "systemd", "openjd", "opencue", "flamenco"])
     p.add_argument("--source", type=Path, required=True)
     p.add_argument("--work", type=Path, required=True)
     p.add_argument("--farm", type=Path)
@@ -326,7 +519,8 @@ def main():
     p.add_argument("--server")
     args = p.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
-    {"localhost": localhost, "kill": kill, "k8s": k8s, "systemd": systemd}[args.test](args)
+    {"localhost": localhost, "kill": kill, "k8s": k8s, "systemd": systemd, "openjd": openjd, "opencue": opencue,
+     "flamenco": flamenco}[args.test](args)
     if FAILURES:
         print(f"{len(FAILURES)} check(s) failed", file=sys.stderr)
         return 1
