@@ -4,7 +4,8 @@
   localhost  3 gdvr-farm workers render 3 chunks concurrently, finalize joins
              them: the final EXRs equal gdvr-render's single-process frames
              byte for byte (pt and gpt); reruns change nothing; errors name
-             the frame and path and exit non-zero.
+             the frame and path and exit non-zero. tgpt's temporal window
+             reads neighbouring chunks' buffers.
   kill       a worker killed with SIGKILL mid-frame leaves no visible partial
              file; the rerun renders only what is missing and the result is
              unchanged.
@@ -80,10 +81,11 @@ def snapshot(folder):
 
 def localhost(args):
     farm, render = args.farm, args.render
-    for integrator in ("pt", "gpt"):
+    for integrator in ("pt", "gpt", "tgpt"):
         work = fresh(args.work / integrator)
+        extra = {"reconstruction": {"window": 4}} if integrator == "tgpt" else {}
         job = write_job(args.source, work / "job.json", frames="0-5", width=24, height=24, spp=2,
-                        integrator=integrator)
+                        integrator=integrator, **extra)
         ref = run([render, job, "--out", work / "ref", "--threads", "1"])
         if not check(ref.returncode == 0, f"{integrator}: gdvr-render single-process run"):
             print(ref.stderr)
@@ -111,6 +113,11 @@ def localhost(args):
         check(run([farm, "status", job, "--buffers", buffers]).returncode == 0,
               f"{integrator}: status exits 0 once every chunk is done")
 
+        if integrator == "tgpt":
+            # The temporal window reaches past a chunk: finalizing 0-2 alone
+            # reads frames 3.. too and must still match the whole-shot solve.
+            part = run([farm, "finalize", job, "--frames", "0-2", "--buffers", buffers, "--out", out])
+            check(part.returncode == 0, "tgpt: finalize of chunk 0-2 on its own")
         fin = run([farm, "finalize", job, "--buffers", buffers, "--out", out, "--video"])
         if not check(fin.returncode == 0, f"{integrator}: finalize"):
             print(fin.stderr)
