@@ -98,6 +98,11 @@ struct Server {
                                      "--threads=" + std::to_string(threads)};
     pid = fork();
     if (pid == 0) {
+      // Its own session, hence its own scheduler autogroup: otherwise the
+      // server's CPU share on a shared machine would grow with the activity of
+      // this process's watcher threads, and the runs with watchers would look
+      // faster than those without.
+      setsid();
       FILE* log = std::freopen((dir + "/server.log").c_str(), "w", stdout);
       (void)log;
       dup2(STDOUT_FILENO, STDERR_FILENO);
