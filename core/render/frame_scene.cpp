@@ -99,6 +99,16 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
           p2 = m.positions[m.indices[3 * t + 2]];
     s.face_normals[t] = normalize(cross(p1 - p0, p2 - p0));
   }
+  s.flat.assign(m.triangle_count(), 1);
+  if (!m.normals.empty() && !shape.face_normals) {
+    for (size_t t = 0; t < m.triangle_count(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        Vec3f vn = m.normals[m.indices[3 * t + k]];
+        // Object-space normals of an instanced mesh are compared in object space too.
+        if (!(dot(vn, s.face_normals[t]) > 1.0f - 1e-6f) || std::abs(length_squared(vn) - 1.0f) > 1e-5f)
+          s.flat[t] = 0;
+      }
+  }
   return accel_->add_mesh(int(i), m.positions.data(), m.positions.size(), m.indices.data(), m.triangle_count(),
                           animated, shape.to_world);
 }
@@ -179,6 +189,21 @@ Status FrameScene::update(const Scene& scene) {
   return prepare_emitters();
 }
 
+// Interpolated vertex normal (Mitsuba's smooth shading normal), or the face
+// normal where the triangle is flat or the mesh has none.
+Vec3f FrameScene::shading_normal(const ShapeState& s, const Shape& shape, uint32_t tri, float b1, float b2,
+                                 Vec3f face_n) const {
+  const TriangleMesh& m = *s.mesh;
+  if (m.normals.empty() || shape.face_normals) return face_n;
+  // Under a mirroring instance transform the face normal flips but vertex normals do not.
+  if (s.flat[tri] && s.handedness > 0) return face_n;
+  uint32_t i0 = m.indices[3 * tri], i1 = m.indices[3 * tri + 1], i2 = m.indices[3 * tri + 2];
+  Vec3f interp = m.normals[i0] * (1.0f - b1 - b2) + m.normals[i1] * b1 + m.normals[i2] * b2;
+  if (s.instanced) interp = s.to_world.normal(interp);
+  interp = normalize(interp);
+  return (is_finite(interp) && length_squared(interp) > 0.5f) ? interp : face_n;
+}
+
 bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
   RayHit hit;
   if (!accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, &hit)) return false;
@@ -206,13 +231,7 @@ bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
     if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
     si->p = p0 * b0 + p1 * b1 + p2 * b2;
     si->n = s.instanced ? normalize(s.to_world.normal(s.face_normals[hit.prim])) * s.handedness : s.face_normals[hit.prim];
-    ns = si->n;
-    if (!m.normals.empty() && !shape.face_normals) {
-      Vec3f interp = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;
-      if (s.instanced) interp = s.to_world.normal(interp);
-      interp = normalize(interp);
-      if (is_finite(interp) && length_squared(interp) > 0.5f) ns = interp;
-    }
+    ns = shading_normal(s, shape, hit.prim, b1, b2, si->n);
     si->uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
   }
   if (shape.flip_normals) {
@@ -283,12 +302,7 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
         Vec2f b = square_to_uniform_triangle({u_tri, u.y});
         p = p0 * (1.0f - b.x - b.y) + p1 * b.x + p2 * b.y;
         n = s.instanced ? normalize(s.to_world.normal(s.face_normals[tri])) * s.handedness : s.face_normals[tri];
-        if (!m.normals.empty() && !shape.face_normals) {
-          Vec3f interp = m.normals[i0] * (1.0f - b.x - b.y) + m.normals[i1] * b.x + m.normals[i2] * b.y;
-          if (s.instanced) interp = s.to_world.normal(interp);
-          interp = normalize(interp);
-          if (is_finite(interp) && length_squared(interp) > 0.5f) n = interp;
-        }
+        n = shading_normal(s, shape, uint32_t(tri), b.x, b.y, n);
         if (shape.flip_normals) n = -n;
         Vec3f d = p - ref.p;
         float dist2 = length_squared(d);

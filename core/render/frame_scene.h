@@ -59,6 +59,9 @@ class FrameScene {
   struct ShapeState {
     std::shared_ptr<const TriangleMesh> mesh;  // world space if !instanced
     std::vector<Vec3f> face_normals;           // unit, same space as `mesh` (saves a cross + sqrt per hit)
+    // Per triangle: its three vertex normals equal the face normal, so the
+    // shading normal needs no interpolation (box-like meshes, flat quads).
+    std::vector<uint8_t> flat;
     bool instanced = false;
     Transform to_world, to_object;
     float handedness = 1;  // sign of det(to_world): a mirroring transform flips cross-product normals
@@ -75,6 +78,7 @@ class FrameScene {
   FrameScene() = default;
   Status build_shape_state(size_t i, bool animated);
   Status prepare_emitters();
+  Vec3f shading_normal(const ShapeState& s, const Shape& shape, uint32_t tri, float b1, float b2, Vec3f face_n) const;
   float pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const;
   Rgb eval_envmap(const Emitter& e, Vec3f d) const;
 

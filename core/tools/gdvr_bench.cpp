@@ -14,6 +14,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -94,22 +95,21 @@ int main(int argc, char** argv) {
   s.path.rr_depth = scene->defaults.rr_depth;
   const int thread_count = resolve_thread_count(threads);
 
-  // ---- Path tracer ----
-  std::vector<double> pt_rate;
+  // Record the exact rays the render traces, then alternate path-tracer and
+  // bare runs so that both see the same machine load (this machine is shared).
+  std::vector<RecordedRay> rays = record_rays(frame_scene, s);
+  const Accelerator& accel = frame_scene.accelerator();
+  tbb::task_arena arena(thread_count);
+  std::vector<double> pt_rate, bare_rate;
   uint64_t pt_rays = 0;
   for (int r = 0; r < runs; ++r) {
+    // ---- Path tracer ----
     auto result = render_frame_pt(frame_scene, s, 0, {});
     if (!result.ok()) { std::fprintf(stderr, "gdvr-bench: %s\n", result.status().to_string().c_str()); return 1; }
     pt_rays = result->rays;
     pt_rate.push_back(double(result->rays) / result->seconds);
-  }
 
-  // ---- Bare ray casting of the same rays ----
-  std::vector<RecordedRay> rays = record_rays(frame_scene, s);
-  const Accelerator& accel = frame_scene.accelerator();
-  std::vector<double> bare_rate;
-  tbb::task_arena arena(thread_count);
-  for (int r = 0; r < runs; ++r) {
+    // ---- Bare ray casting of the same rays ----
     std::atomic<uint64_t> hits{0};
     auto t0 = std::chrono::steady_clock::now();
     arena.execute([&] {
@@ -134,6 +134,10 @@ int main(int argc, char** argv) {
   std::printf("rays per render  %llu (recorded %zu)\n", (unsigned long long)pt_rays, rays.size());
   std::printf("path tracer      %.2f Mrays/s\n", pt * 1e-6);
   std::printf("bare Embree      %.2f Mrays/s\n", bare * 1e-6);
-  std::printf("ratio            %.3f\n", pt / bare);
+  std::vector<double> ratios;
+  for (int r = 0; r < runs; ++r) ratios.push_back(pt_rate[size_t(r)] / bare_rate[size_t(r)]);
+  std::printf("ratio            %.3f (median of per-run ratios)\n", median(ratios));
+  double loadavg[1] = {0};
+  if (getloadavg(loadavg, 1) == 1) std::printf("load average     %.2f\n", loadavg[0]);
   return 0;
 }
