@@ -4,8 +4,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "core/bsdf/bsdf.h"
 
@@ -49,14 +52,16 @@ inline std::string angle_tag(float z) {
   return buf;
 }
 
-inline std::vector<BsdfCase> all_bsdf_cases() {
-  struct Proto {
-    std::string name;
-    Bsdf bsdf;
-    bool from_below;
-  };
-  std::vector<Proto> protos;
-  auto add = [&](std::string n, Bsdf b, bool below = false) { protos.push_back({std::move(n), b, below}); };
+// One BSDF configuration (no incident direction yet).
+struct BsdfConfig {
+  std::string name;  // gtest-safe: [A-Za-z0-9_]
+  Bsdf bsdf;
+  bool from_below;  // also test incidence from below (transmissive, two-sided)
+};
+
+inline std::vector<BsdfConfig> all_bsdf_configs() {
+  std::vector<BsdfConfig> configs;
+  auto add = [&](std::string n, Bsdf b, bool below = false) { configs.push_back({std::move(n), b, below}); };
   using T = BsdfType;
   using M = MicrofacetType;
   add("diffuse", make_bsdf(T::kDiffuse));
@@ -94,9 +99,13 @@ inline std::vector<BsdfCase> all_bsdf_cases() {
     add("roughdielectric_ggx_allnormals", b, true);
   }
   add("thindielectric", make_bsdf(T::kThinDielectric), true);
+  return configs;
+}
 
+// Every configuration at every incident angle.
+inline std::vector<BsdfCase> all_bsdf_cases() {
   std::vector<BsdfCase> cases;
-  for (const Proto& p : protos) {
+  for (const BsdfConfig& p : all_bsdf_configs()) {
     std::vector<float> zs = {0.95f, 0.5f, 0.05f};
     if (p.from_below) {
       zs.push_back(-0.6f);
@@ -107,13 +116,44 @@ inline std::vector<BsdfCase> all_bsdf_cases() {
   return cases;
 }
 
-inline std::vector<BsdfCase> non_delta_cases() {
-  std::vector<BsdfCase> out;
-  for (BsdfCase& c : all_bsdf_cases())
-    if (!c.bsdf.is_delta_only()) out.push_back(c);
+// Parameter lists for properties that only apply to some BSDFs, built by
+// filtering the lists above, so that every instantiated test applies to its
+// parameter (no GTEST_SKIP).
+template <typename T, typename Pred>
+std::vector<T> filtered(std::vector<T> all, Pred keep) {
+  std::vector<T> out;
+  for (T& c : all)
+    if (keep(c.bsdf)) out.push_back(std::move(c));
   return out;
 }
 
-inline std::string case_name(const BsdfCase& c) { return c.name; }
+// Has a lobe with a density (diffuse or glossy): pdf()/eval() are not zero everywhere.
+inline bool has_density(const Bsdf& b) { return !b.is_delta_only(); }
+// Only Dirac lobes: sample() is the whole BSDF, eval()/pdf() are zero.
+inline bool is_delta_only(const Bsdf& b) { return b.is_delta_only(); }
+// Reflects only, with a density: eval() obeys Helmholtz reciprocity.
+inline bool is_reflection_only_with_density(const Bsdf& b) {
+  return has_density(b) && !b.has_lobe(kLobeTransmission);
+}
+
+inline std::vector<BsdfCase> density_cases() { return filtered(all_bsdf_cases(), has_density); }
+inline std::vector<BsdfCase> delta_only_cases() { return filtered(all_bsdf_cases(), is_delta_only); }
+inline std::vector<BsdfConfig> reflection_only_density_configs() {
+  return filtered(all_bsdf_configs(), is_reflection_only_with_density);
+}
+
+// Readable names: for INSTANTIATE_TEST_SUITE_P's name generator ...
+struct ParamName {
+  template <typename P>
+  std::string operator()(const ::testing::TestParamInfo<P>& info) const {
+    return info.param.name;
+  }
+};
+
+// ... and for gtest's value printer ("GetParam() = ...") instead of raw bytes.
+inline void PrintTo(const BsdfCase& c, std::ostream* os) {
+  *os << c.name << " (wo = " << c.wo.x << ", " << c.wo.y << ", " << c.wo.z << ")";
+}
+inline void PrintTo(const BsdfConfig& c, std::ostream* os) { *os << c.name; }
 
 }  // namespace gdvr::testing
