@@ -118,7 +118,7 @@ inline std::vector<BsdfCase> all_bsdf_cases() {
 
 // Parameter lists for properties that only apply to some BSDFs, built by
 // filtering the lists above, so that every instantiated test applies to its
-// parameter (no GTEST_SKIP).
+// parameter and nothing is skipped at run time.
 template <typename T, typename Pred>
 std::vector<T> filtered(std::vector<T> all, Pred keep) {
   std::vector<T> out;
