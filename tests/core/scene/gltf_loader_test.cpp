@@ -169,8 +169,7 @@ TEST(GltfLoaderTest, AnimatedCubeRotatesAndHasTexturedMaterial) {
 }
 
 TEST(GltfLoaderTest, CesiumMilkTruckWheelsFollowTheirMatrixParents) {
-  const std::string path = std::string(GDVR_SOURCE_DIR) + "/../shared/scenes/gltf/CesiumMilkTruck/CesiumMilkTruck.gltf";
-  if (!fs::exists(path)) GTEST_SKIP() << "CesiumMilkTruck is not bundled (550 KB); found only beside the repo";
+  const std::string path = std::string(GDVR_SOURCE_DIR) + "/scenes/gltf/CesiumMilkTruck/CesiumMilkTruck.gltf";
   auto loaded = load_gltf_scene(path, LoadOptions());
   ASSERT_TRUE(loaded.ok()) << loaded.status().to_string();
   EXPECT_EQ(loaded->scene.shapes.size(), 5u);  // 3 truck primitives + 2 wheels
