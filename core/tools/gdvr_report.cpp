@@ -1,0 +1,170 @@
+// gdvr-report: error against run time (REFERENCE.md §6-§7; docs/report.md).
+//   gdvr-report JOB.json|SCENE.xml --out DIR [--reference REF.exr|ref_%04d.exr]
+//       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]
+//       [--threads N] [--width W --height H] [--seed N] [--param NAME=VALUE ...]
+// Renders PT, G-PT (L1, L2, weighted) and, for animations, T-GPT (L1, L2) at
+// equal time budgets per frame against a reference (rendered with PT and
+// cached in DIR/reference/, or supplied) and writes DIR/results.csv,
+// results.json, plot_*.png, images/ and report.html. Progress on stderr;
+// Ctrl-C cancels (the results so far stay in DIR).
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/io/color_transform.h"
+#include "core/report/error_time_report.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::atomic<bool> g_cancel{false};
+void on_signal(int) { g_cancel = true; }
+
+int usage(const char* msg) {
+  if (msg) std::fprintf(stderr, "gdvr-report: %s\n", msg);
+  std::fprintf(stderr,
+               "usage: gdvr-report JOB.json|SCENE.xml --out DIR [--reference REF.exr|ref_%%04d.exr]\n"
+               "       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]\n"
+               "       [--threads N] [--width W] [--height H] [--seed N] [--param NAME=VALUE ...]\n"
+               "methods: pt gpt-l1 gpt-l2 gpt-weighted tgpt-l1 tgpt-l2 (default: all that apply)\n");
+  return 2;
+}
+
+bool parse_int(const std::string& s, long long lo, long long hi, long long* out) {
+  try {
+    size_t pos;
+    long long v = std::stoll(s, &pos);
+    if (pos != s.size() || v < lo || v > hi) return false;
+    *out = v;
+    return true;
+  } catch (...) {
+    return false;
+  }
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, sep))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// The shipped OCIO config: beside an installed binary
+// (<prefix>/bin -> <prefix>/share/gdvr/ocio) or in the source tree of a build
+// folder (build/core/gdvr-report -> data/ocio); as gdvr-farm finds it.
+std::string find_shipped_ocio_config() {
+  std::error_code ec;
+  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return "data/ocio/config.ocio";
+  const fs::path dir = exe.parent_path();
+  for (const fs::path& candidate :
+       {dir / "../share/gdvr/ocio/config.ocio", dir / "../../data/ocio/config.ocio", dir / "../data/ocio/config.ocio"})
+    if (fs::exists(candidate, ec)) return fs::weakly_canonical(candidate, ec).string();
+  return "data/ocio/config.ocio";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace gdvr;
+  if (argc < 2) return usage(nullptr);
+  std::string input;
+  ErrorTimeReportOptions o;
+  JobSpec overrides;
+  bool have_frames = false, seed_set = false;
+  std::map<std::string, std::string> params;
+
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    auto next = [&](const char* name) -> std::string {
+      if (i + 1 >= argc) {
+        usage((std::string(name) + " needs a value").c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
+    long long v = 0;
+    if (a == "--out") o.out_dir = next("--out");
+    else if (a == "--reference") o.reference = next("--reference");
+    else if (a == "--budgets") {
+      o.budgets.clear();
+      for (const std::string& b : split(next("--budgets"), ',')) {
+        try {
+          size_t pos;
+          double s = std::stod(b, &pos);
+          if (pos != b.size() || !(s > 0)) throw 0;
+          o.budgets.push_back(s);
+        } catch (...) {
+          return usage(("--budgets: '" + b + "' is not a positive number of seconds").c_str());
+        }
+      }
+      if (o.budgets.empty()) return usage("--budgets: expected seconds per frame, e.g. 0.5,1,2");
+    } else if (a == "--frames") { overrides.frames = next("--frames"); have_frames = true; }
+    else if (a == "--reference-spp") { if (!parse_int(next("--reference-spp"), 1, 1 << 20, &v)) return usage("--reference-spp: expected 1..1048576"); o.reference_spp = int(v); }
+    else if (a == "--methods") o.methods = split(next("--methods"), ',');
+    else if (a == "--threads") { if (!parse_int(next("--threads"), 1, 1024, &v)) return usage("--threads: expected 1..1024"); o.run.threads = int(v); }
+    else if (a == "--width") { if (!parse_int(next("--width"), 1, 16384, &v)) return usage("--width: expected 1..16384"); overrides.width = int(v); }
+    else if (a == "--height") { if (!parse_int(next("--height"), 1, 16384, &v)) return usage("--height: expected 1..16384"); overrides.height = int(v); }
+    else if (a == "--seed") { if (!parse_int(next("--seed"), 0, (1LL << 62), &v)) return usage("--seed: expected a non-negative integer"); overrides.seed = uint64_t(v); seed_set = true; }
+    else if (a == "--param" || a == "-D") {
+      std::string kv = next("--param");
+      size_t eq = kv.find('=');
+      if (eq == std::string::npos || eq == 0) return usage("--param: expected NAME=VALUE");
+      params[kv.substr(0, eq)] = kv.substr(eq + 1);
+    } else if (a == "-h" || a == "--help") return usage(nullptr);
+    else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
+    else if (input.empty()) input = a;
+    else return usage(("unexpected argument " + a).c_str());
+  }
+  if (input.empty()) return usage("no scene or job file given");
+  if (o.out_dir.empty()) return usage("--out DIR is required");
+
+  JobSpec& job = o.job;
+  if (fs::path(input).extension() == ".json") {
+    std::ifstream in(input);
+    if (!in) { std::fprintf(stderr, "gdvr-report: cannot read %s\n", input.c_str()); return 1; }
+    std::stringstream ss;
+    ss << in.rdbuf();
+    auto parsed = parse_job_json(ss.str(), input);
+    if (!parsed.ok()) { std::fprintf(stderr, "gdvr-report: %s\n", parsed.status().to_string().c_str()); return 1; }
+    job = std::move(parsed.value());
+    o.run.base_dir = fs::absolute(input).parent_path().string();
+    // A job that names its reference: relative to the job file.
+    if (o.reference.empty() && !job.reference.empty())
+      o.reference = fs::path(job.reference).is_relative() ? (fs::path(o.run.base_dir) / job.reference).string()
+                                                          : job.reference;
+  } else {
+    job.scene = fs::absolute(input).string();
+  }
+  if (have_frames) job.frames = overrides.frames;
+  if (overrides.width) job.width = overrides.width;
+  if (overrides.height) job.height = overrides.height;
+  if (seed_set) job.seed = overrides.seed;
+  for (auto& [k, val] : params) job.params[k] = val;
+  o.input_name = input;
+  o.ocio_config = resolve_ocio_config_path(find_shipped_ocio_config());
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  auto log = [](const std::string& line) { std::fprintf(stderr, "gdvr-report: %s\n", line.c_str()); };
+  auto report = run_error_time_report(o, log, &g_cancel);
+  if (!report.ok()) {
+    std::fprintf(stderr, "gdvr-report: %s\n", report.status().to_string().c_str());
+    return report.status().code() == StatusCode::kCancelled ? 130 : 1;
+  }
+  // The key numbers on stdout: equal-time ratios at every budget.
+  std::printf("%-14s %8s %10s %8s %12s %12s %10s\n", "method", "budget", "s/frame", "spp", "relMSE", "ratio vs PT",
+              "flicker");
+  for (const ReportRow& r : report->rows)
+    std::printf("%-14s %8g %10.3f %8.1f %12.4g %12.3g %10.3g\n", r.method.c_str(), r.budget_s, r.seconds_per_frame,
+                r.spp, r.rel_mse_global, r.method == "pt" ? 1.0 : r.equal_time_ratio_global, r.flicker);
+  std::fprintf(stderr, "gdvr-report: wrote %s\n", report->html_path.c_str());
+  return 0;
+}
