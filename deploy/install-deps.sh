@@ -5,7 +5,7 @@ set -euo pipefail
 
 PACKAGES=(
   # toolchain
-  build-essential cmake ninja-build pkg-config git python3 python3-pip python3-venv
+  build-essential cmake ninja-build pkg-config git python3 python3-pip python3-venv clang libclang-rt-14-dev
   # ray tracing, maths, parallelism
   libembree-dev libeigen3-dev libtbb-dev
   # images, colour, video
