@@ -345,10 +345,12 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
     auto it = buffers.find(job_frames[size_t(p)]);
     return it == buffers.end() ? nullptr : &it->second.layers;
   };
-  for (int f : frames_needed_to_finalize(job, job_frames, frame))
-    if (!buffers.count(f))
+  // The frame and its successor must be here; the windows' other frames only
+  // while their window is not solved yet (the cache reports what is missing).
+  for (int p : {pos, pos + 1})
+    if (p < n && !layers_at(p))
       return failed_precondition("finalize: frame " + std::to_string(frame) + " needs the buffers of frame " +
-                                 std::to_string(f));
+                                 std::to_string(job_frames[size_t(p)]));
   const FrameBuffers& fb = buffers.at(frame);
   const ImageLayer* direct = fb.layers.find("direct");
   if (!direct) return invalid_argument("finalize: frame buffers lack the 'direct' layer");
@@ -524,7 +526,17 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
       schedule.finalized();
       if (windows) windows->release_before(frame_position(job_frames, f) + 1);
     }
-    for (int f : schedule.releasable()) buffers.erase(f);
+    std::vector<int> release;
+    if (windows) {
+      // tgpt: solved windows no longer need their frames' buffers.
+      const int first =
+          schedule.done() ? int(job_frames.size()) : frame_position(job_frames, todo[size_t(schedule.next_index())]);
+      release = schedule.releasable(
+          [&](int f) { return windows->buffers_needed(frame_position(job_frames, f), first); });
+    } else {
+      release = schedule.releasable();
+    }
+    for (int f : release) buffers.erase(f);
   }
   return Status::Ok();
 }

@@ -13,13 +13,14 @@ StreamSchedule::StreamSchedule(std::vector<int> todo, std::vector<std::vector<in
 
 void StreamSchedule::rendered(int frame) {
   held_.insert(frame);
+  seen_.insert(frame);
   max_buffered_ = std::max(max_buffered_, int(held_.size()));
 }
 
 int StreamSchedule::ready() const {
   if (done()) return -1;
   for (int f : needs_[next_])
-    if (!held_.count(f)) return -1;
+    if (!seen_.count(f)) return -1;
   return todo_[next_];
 }
 
@@ -36,6 +37,19 @@ std::vector<int> StreamSchedule::releasable() {
   std::vector<int> out;
   for (auto it = held_.begin(); it != held_.end();) {
     if (keep.count(*it)) {
+      ++it;
+    } else {
+      out.push_back(*it);
+      it = held_.erase(it);
+    }
+  }
+  return out;
+}
+
+std::vector<int> StreamSchedule::releasable(const std::function<bool(int)>& still_needed) {
+  std::vector<int> out;
+  for (auto it = held_.begin(); it != held_.end();) {
+    if (still_needed(*it)) {
       ++it;
     } else {
       out.push_back(*it);

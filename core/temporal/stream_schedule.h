@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <set>
 #include <vector>
 
@@ -22,12 +23,19 @@ class StreamSchedule {
 
   // Records that `frame`'s buffers are in.
   void rendered(int frame);
-  // The next frame to finalize if all its buffers are in, else -1 (also when done).
+  // The next frame to finalize if all its needed frames have been rendered,
+  // else -1 (also when done).
   int ready() const;
   // Records that ready() was finalized.
   void finalized();
   // Frames that were rendered and no frame still to finalize needs: drop them.
   std::vector<int> releasable();
+  // Same, with a finer rule from the caller: a held frame is kept while
+  // `still_needed(frame)` is true (tgpt: only windows not solved yet and the
+  // next frames' own dt pairs; see temporal_window.h). The caller's rule must
+  // keep whatever a frame still to finalize reads.
+  std::vector<int> releasable(const std::function<bool(int frame)>& still_needed);
+  int next_index() const { return int(next_); }  // index into `todo` of the next frame out
   bool done() const { return next_ >= todo_.size(); }
 
   int buffered() const { return int(held_.size()); }
@@ -37,7 +45,7 @@ class StreamSchedule {
   std::vector<int> todo_;
   std::vector<std::vector<int>> needs_;
   std::vector<int> render_order_;
-  std::set<int> held_;
+  std::set<int> held_, seen_;
   size_t next_ = 0;
   int max_buffered_ = 0;
 };

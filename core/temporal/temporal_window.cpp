@@ -46,7 +46,8 @@ Status TemporalWindowCache::solve(const WindowRange& w, const ShotLayers& layers
   GradientWindow window;
   for (int k = w.start; k < w.end; ++k) {
     const LayeredImage* cur = layers(k);
-    if (!cur) return failed_precondition("tgpt: no buffers for shot position " + std::to_string(k));
+    if (!cur) return failed_precondition("tgpt: window [" + std::to_string(w.start) + ", " + std::to_string(w.end) +
+                                         "): no buffers for shot position " + std::to_string(k));
     // Temporal terms only towards a frame inside the window: the window's
     // last frame has none (constraints leaving a window are dropped, §5).
     Expected<GradientFrame> gf = invalid_argument("unset");
@@ -97,6 +98,15 @@ Expected<Image> TemporalWindowCache::reconstruct(int index, const ShotLayers& la
   const float inv = weight > 0 ? float(1.0 / weight) : 0.0f;
   for (float& v : sum.data()) v *= inv;
   return sum;
+}
+
+bool TemporalWindowCache::buffers_needed(int position, int first_unfinalized) const {
+  if (position >= first_unfinalized) return true;
+  for (size_t i = 0; i < windows_.size(); ++i) {
+    const WindowRange& w = windows_[i];
+    if (w.end > first_unfinalized && w.start <= position && position < w.end && !solved_.count(int(i))) return true;
+  }
+  return false;
 }
 
 void TemporalWindowCache::release_before(int index) {

@@ -43,6 +43,12 @@ class TemporalWindowCache {
   Expected<Image> reconstruct(int index, const ShotLayers& layers, ReconStats* stats);
   // Frees the solutions of windows that end at or before `index`.
   void release_before(int index);
+  // Whether the buffers of shot position `position` are still read once every
+  // position before `first_unfinalized` is out: by a frame not out yet (itself,
+  // or as the successor of its dt layer), or by a window containing such a
+  // frame that is not solved yet. Solved windows keep their solutions, so the
+  // streaming run holds about W frames of buffers instead of W + H.
+  bool buffers_needed(int position, int first_unfinalized) const;
   int windows_solved() const { return windows_solved_; }
   int cached_windows() const { return int(solved_.size()); }
 

@@ -317,7 +317,8 @@ int recon(const Args& a) {
       schedule.finalized();
       ++emitted;
     }
-    for (int d : schedule.releasable()) buffers.erase(d);
+    const int first = schedule.done() ? n : schedule.next_index();
+    for (int d : schedule.releasable([&](int p) { return cache.buffers_needed(p, first); })) buffers.erase(d);
   }
   const double total = seconds_since(t0);
   std::printf("stage 2 %s, %dx%d, shot %d frames, window %d (hop %d): %d windows, %.2f s per output frame "
@@ -330,6 +331,7 @@ int recon(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress lines show while it runs
   Args a;
   for (int i = 1; i < argc; ++i) {
     std::string k = argv[i];

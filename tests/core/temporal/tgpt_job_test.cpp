@@ -194,7 +194,8 @@ TEST(TgptJobTest, StreamsInOrderAndStagesAgree) {
   std::vector<FrameOutput> out;
   JobCallbacks cb;
   cb.on_frame_final = [&](const FrameOutput& f) { out.push_back(f); };
-  ASSERT_TRUE(run_job(job, options, cb, nullptr).ok());
+  Status st = run_job(job, options, cb, nullptr);
+  ASSERT_TRUE(st.ok()) << st.to_string();
   ASSERT_EQ(out.size(), 7u);
   for (int i = 0; i < 7; ++i) EXPECT_EQ(out[size_t(i)].frame, i);
 
