@@ -285,7 +285,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   json j;
   try {
     j = json::parse(json_text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1E99999
     return invalid_argument(origin + ": not valid JSON: " + e.what());
   }
   JsonReader r(origin);
