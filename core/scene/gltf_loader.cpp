@@ -51,7 +51,10 @@ struct FsContext {
 };
 
 bool path_is_inside(const fs::path& path, const fs::path& root) {
-  auto p = fs::weakly_canonical(path), r = fs::weakly_canonical(root);
+  // error_code overloads: a URI that is no valid path (too long, ...) is simply not inside.
+  std::error_code ec_p, ec_r;
+  auto p = fs::weakly_canonical(path, ec_p), r = fs::weakly_canonical(root, ec_r);
+  if (ec_p || ec_r) return false;
   auto mismatch = std::mismatch(r.begin(), r.end(), p.begin(), p.end());
   return mismatch.first == r.end();
 }

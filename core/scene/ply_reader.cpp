@@ -1,5 +1,6 @@
 #include "core/scene/ply_reader.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cstring>
 #include <fstream>
@@ -185,6 +186,11 @@ Expected<TriangleMesh> parse_ply(const std::string& data, const std::string& ori
   };
   bool vertices_seen = false;
   for (const PlyElement& e : elements) {
+    // Every item takes at least one byte of the body (ASCII or binary), so a
+    // count beyond the bytes left is corrupt; checked before a tiny file can
+    // allocate or loop for a declared count of 2^63.
+    if (e.count > data.size() - std::min(data.size(), reader.pos()))
+      return body_error("element '" + e.name + "' declares " + std::to_string(e.count) + " items, more than the file holds");
     if (e.name == "vertex") {
       if (e.count > (size_t(1) << 31)) return body_error("too many vertices");
       int ix[3] = {-1, -1, -1}, in[3] = {-1, -1, -1}, iuv[2] = {-1, -1};

@@ -93,7 +93,7 @@ Expected<TriangleMesh> parse_serialized(const std::string& data, int shape_index
   size_t table = data.size() - 4 - size_t(count) * entry;
   const unsigned char* e = bytes + table + size_t(shape_index) * entry;
   uint64_t offset = version == 4 ? load_le<uint64_t>(e) : load_le<uint32_t>(e);
-  if (offset + 4 > table) return invalid_argument(origin + ": mesh offset beyond the data");
+  if (offset > table || table - offset < 4) return invalid_argument(origin + ": mesh offset beyond the data");  // no overflow for offsets near 2^64
   if (load_le<uint16_t>(bytes + offset) != kSerializedMagic || load_le<uint16_t>(bytes + offset + 2) != version)
     return invalid_argument(origin + ": mesh " + std::to_string(shape_index) + " has a bad header");
 

@@ -1,0 +1,76 @@
+// Inputs found by the fuzz targets (tests/fuzz/, docs/report.md#fuzzing) that
+// crashed a scene reader; each must now be a clean error.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/scene/gltf_loader.h"
+#include "core/scene/ply_reader.h"
+#include "core/scene/serialized_reader.h"
+
+namespace gdvr {
+namespace {
+
+namespace fs = std::filesystem;
+
+// fuzz_serialized: an offset-table entry near 2^64 wrapped `offset + 4` past
+// the bounds check and read before the buffer (UBSan: pointer overflow).
+TEST(SceneFuzzRegressionTest, SerializedOffsetNear2To64IsAnError) {
+  std::string data = {'\x1c', '\x04', '\x04', '\x00'};  // magic 0x041C, version 4
+  data += std::string(8, '\xff');                       // offset 2^64 - 1
+  data += std::string("\x01\x00\x00\x00", 4);           // one mesh
+  auto mesh = parse_serialized(data, 0, "wrap.serialized");
+  ASSERT_FALSE(mesh.ok());
+  EXPECT_EQ(mesh.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(mesh.status().message().find("offset"), std::string::npos) << mesh.status().message();
+  // The same with offset 2^64 - 3 (wraps to exactly 1) and a version-3 table.
+  std::string v3 = {'\x1c', '\x04', '\x03', '\x00'};
+  v3 += std::string("\xfd\xff\xff\xff", 4);
+  v3 += std::string("\x01\x00\x00\x00", 4);
+  EXPECT_FALSE(parse_serialized(v3, 0, "v3.serialized").ok());
+}
+
+// fuzz_ply: an element without properties declaring 2^63 − 1 items (the
+// count overflowed `>>` and saturated) was skipped item by item: a hang. A
+// vertex count of 2^31 in a tiny file resized the arrays before reading.
+TEST(SceneFuzzRegressionTest, PlyElementCountBeyondTheFileIsAnError) {
+  const std::string header =
+      "ply\nformat binary_little_endian 1.0\nelement v\x9artex 4444444444444444444444444444444444444444444444vertex_"
+      "indices\nend_header\n";
+  auto hang = parse_ply(header + std::string(18, '\0'), "hang.ply");
+  ASSERT_FALSE(hang.ok());
+  EXPECT_NE(hang.status().message().find("more than the file holds"), std::string::npos) << hang.status().message();
+
+  auto huge = parse_ply(
+      "ply\nformat ascii 1.0\nelement vertex 2147483648\nproperty float x\nproperty float y\nproperty float z\n"
+      "end_header\n0 0 0\n",
+      "huge.ply");
+  ASSERT_FALSE(huge.ok());
+  EXPECT_NE(huge.status().message().find("more than the file holds"), std::string::npos) << huge.status().message();
+}
+
+// fuzz_gltf: a buffer URI too long to be a file name made
+// std::filesystem::weakly_canonical throw (ENAMETOOLONG) through tinygltf's
+// file-exists callback: std::terminate.
+TEST(SceneFuzzRegressionTest, GltfBufferUriTooLongForAPathIsAnError) {
+  const fs::path dir = fs::temp_directory_path() / ("gdvr_gltf_fuzz_regression_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path file = dir / "long_uri.gltf";
+  {
+    std::ofstream out(file);
+    out << R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":4,"uri":")" << std::string(5000, 'a')
+        << R"(.bin"}],"scenes":[{"nodes":[]}],"scene":0})";
+  }
+  LoadOptions options;
+  options.asset_root = dir.string();
+  Expected<LoadedScene> loaded = Status(StatusCode::kInternal, "not run");
+  ASSERT_NO_THROW(loaded = load_gltf_scene(file.string(), options));
+  EXPECT_FALSE(loaded.ok());
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace gdvr
