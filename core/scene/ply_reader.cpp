@@ -214,6 +214,7 @@ Expected<TriangleMesh> parse_ply(const std::string& data, const std::string& ori
           if (p.is_list) {
             double cnt = 0;
             if (!reader.read(p.count_type, &cnt)) return body_error("truncated vertex data");
+            if (!(cnt >= 0 && cnt <= 1e9)) return body_error("implausible list length in the vertex element");
             double dummy;
             for (long j = 0; j < long(cnt); ++j)
               if (!reader.read(p.type, &dummy)) return body_error("truncated vertex data");
@@ -237,7 +238,7 @@ Expected<TriangleMesh> parse_ply(const std::string& data, const std::string& ori
           const PlyProperty& p = e.props[k];
           double cnt = 1;
           if (p.is_list && !reader.read(p.count_type, &cnt)) return body_error("truncated face data");
-          if (cnt < 0 || cnt > 1e6) return body_error("implausible face vertex count");
+          if (!(cnt >= 0 && cnt <= 1e6)) return body_error("implausible face vertex count");  // NaN too
           poly.clear();
           for (long j = 0; j < long(cnt); ++j) {
             double v = 0;
@@ -258,6 +259,8 @@ Expected<TriangleMesh> parse_ply(const std::string& data, const std::string& ori
         for (const PlyProperty& p : e.props) {
           double cnt = 1, dummy;
           if (p.is_list && !reader.read(p.count_type, &cnt)) return body_error("truncated element '" + e.name + "'");
+          // A float list count (or NaN) beyond long's range made long(cnt) undefined.
+          if (!(cnt >= 0 && cnt <= 1e9)) return body_error("implausible list length in element '" + e.name + "'");
           for (long j = 0; j < long(cnt); ++j)
             if (!reader.read(p.type, &dummy)) return body_error("truncated element '" + e.name + "'");
         }

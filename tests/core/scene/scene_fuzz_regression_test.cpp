@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -50,6 +51,29 @@ TEST(SceneFuzzRegressionTest, PlyElementCountBeyondTheFileIsAnError) {
       "huge.ply");
   ASSERT_FALSE(huge.ok());
   EXPECT_NE(huge.status().message().find("more than the file holds"), std::string::npos) << huge.status().message();
+}
+
+// fuzz_ply: a list whose length is a float (legal PLY) of 7.7e31, or NaN,
+// converted to long: undefined behaviour (UBSan) in the skipped-element, face
+// and vertex loops.
+TEST(SceneFuzzRegressionTest, PlyFloatListLengthOutOfRangeIsAnError) {
+  auto ply_with_list = [](const std::string& element, const std::string& list_name, float length) {
+    std::string h = "ply\nformat binary_little_endian 1.0\n";
+    if (element != "vertex")
+      h += "element vertex 1\nproperty float x\nproperty float y\nproperty float z\n";
+    h += "element " + element + " 1\n";
+    if (element == "vertex") h += "property float x\nproperty float y\nproperty float z\n";
+    h += "property list float int " + list_name + "\nend_header\n";
+    std::string body(12, '\0');  // x, y, z of the one vertex; then the list's length
+    body += std::string(reinterpret_cast<const char*>(&length), 4) + std::string(64, '\0');
+    return h + body;
+  };
+  for (float length : {7.68184e31f, -1.0f, std::nanf("")}) {
+    SCOPED_TRACE(length);
+    EXPECT_FALSE(parse_ply(ply_with_list("edge", "vertex_pair", length), "skip.ply").ok());
+    EXPECT_FALSE(parse_ply(ply_with_list("face", "vertex_indices", length), "face.ply").ok());
+    EXPECT_FALSE(parse_ply(ply_with_list("vertex", "extra", length), "vertex.ply").ok());
+  }
 }
 
 // fuzz_gltf: a buffer URI too long to be a file name made
