@@ -22,7 +22,10 @@ namespace {
 namespace fs = std::filesystem;
 
 bool path_is_inside(const fs::path& path, const fs::path& root) {
-  auto p = fs::weakly_canonical(path), r = fs::weakly_canonical(root);
+  // error_code overloads: a name that is no valid path (too long, ...) is not inside, not an exception.
+  std::error_code ec_p, ec_r;
+  auto p = fs::weakly_canonical(path, ec_p), r = fs::weakly_canonical(root, ec_r);
+  if (ec_p || ec_r) return false;
   auto mismatch = std::mismatch(r.begin(), r.end(), p.begin(), p.end());
   return mismatch.first == r.end();
 }
@@ -70,7 +73,8 @@ Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions
   if (p.is_relative()) p = fs::path(!options.asset_root.empty() ? options.asset_root : options.base_dir) / p;
   if (!options.asset_root.empty() && !path_is_inside(p, options.asset_root))
     return invalid_argument("job.scene: '" + job.scene + "' lies outside the asset root");
-  if (!fs::exists(p)) return not_found("job.scene: '" + job.scene + "' does not exist");
+  std::error_code ec;
+  if (!fs::exists(p, ec)) return not_found("job.scene: '" + job.scene + "' does not exist");
   if (!is_supported_scene_file(p.string()))
     return unimplemented("job.scene: '" + job.scene + "' is not a .xml, .gltf or .glb scene");
   return p.string();

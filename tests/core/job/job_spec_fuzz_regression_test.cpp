@@ -3,6 +3,7 @@
 
 #include <string>
 
+#include "core/job/job_runner.h"
 #include "core/job/job_spec.h"
 
 namespace gdvr {
@@ -19,6 +20,23 @@ TEST(JobSpecFuzzRegressionTest, NumberOverflowIsAnInvalidJsonError) {
     ASSERT_FALSE(job.ok());
     EXPECT_EQ(job.status().code(), StatusCode::kInvalidArgument);
     EXPECT_NE(job.status().message().find("overflow.json"), std::string::npos);
+  }
+}
+
+// The glTF finding's sibling in the job runner (found by reading, not by a
+// fuzz target): a scene name too long for a path made
+// std::filesystem::weakly_canonical / exists throw out of validate_job and
+// run_job, which the server calls on every submitted job.
+TEST(JobSpecFuzzRegressionTest, SceneNameTooLongForAPathIsAnError) {
+  JobSpec job;
+  job.scene = std::string(5000, 'a') + ".xml";
+  for (const std::string& root : {std::string(), std::string(GDVR_SOURCE_DIR) + "/scenes"}) {
+    JobRunOptions options;
+    options.asset_root = root;
+    options.base_dir = std::string(GDVR_SOURCE_DIR) + "/scenes";
+    Status st;
+    ASSERT_NO_THROW(st = validate_job(job, options)) << "asset root '" << root << "'";
+    EXPECT_FALSE(st.ok());
   }
 }
 
