@@ -52,7 +52,7 @@ Expected<TgptSettings> tgpt_settings_for(const JobSpec& job) {
   auto method = parse_recon_method(job.reconstruction.method);
   if (!method.ok()) return method.status().with_context("job.reconstruction.");
   TgptSettings s;
-  s.gpt = GptSettings::defaults_for(shift.value());
+  s.gpt = TgptSettings::gpt_defaults_for(shift.value());
   s.recon.method = method.value();
   s.recon.alpha = job.reconstruction.alpha;
   s.window = job.reconstruction.window;
@@ -381,13 +381,18 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
     for (Image* im : {&tg.dt, &tg.dxdt, &tg.dydt, &tg.dt_var, &tg.dxdt_var, &tg.dydt_var}) *im = Image(w, h, 3);
     tg.failure_rate = Image(w, h, 1);
   }
-  for (const char* name : {"primal", "dx", "dy"})
-    if (const ImageLayer* l = fb.layers.find(name)) out.image.layers.push_back(*l);
+  auto add_estimate = [&](const char* name) -> Status {
+    auto est = tgpt_frame_estimate(fb.layers, name);
+    if (!est.ok()) return est.status();
+    out.image.add(name, {"R", "G", "B"}, std::move(est.value()));
+    return Status::Ok();
+  };
+  for (const char* name : {"primal", "dx", "dy"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
   out.image.add("dt", {"R", "G", "B"}, std::move(tg.dt));
   out.image.add("dxdt", {"R", "G", "B"}, std::move(tg.dxdt));
   out.image.add("dydt", {"R", "G", "B"}, std::move(tg.dydt));
-  for (const char* name : {"direct", "primal_var", "dx_var", "dy_var"})
-    if (const ImageLayer* l = fb.layers.find(name)) out.image.layers.push_back(*l);
+  out.image.layers.push_back(*direct);
+  for (const char* name : {"primal_var", "dx_var", "dy_var"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
   out.image.add("dt_var", {"R", "G", "B"}, std::move(tg.dt_var));
   out.image.add("dxdt_var", {"R", "G", "B"}, std::move(tg.dxdt_var));
   out.image.add("dydt_var", {"R", "G", "B"}, std::move(tg.dydt_var));

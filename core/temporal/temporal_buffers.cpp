@@ -31,16 +31,11 @@ LayeredImage tgpt_frame_layers(TgptFrameRender&& r) {
   LayeredImage L;
   GradientFilmBuffers& a = r.a;
   GradientFilmBuffers& b = r.b;
-  // ---- The frame's estimates: average of the two independent half passes ----
-  L.add("primal", kRgb, average(a.primal, b.primal, 0.5f));
-  L.add("dx", kRgb, average(a.dx, b.dx, 0.5f));
-  L.add("dy", kRgb, average(a.dy, b.dy, 0.5f));
+  // The frame's own estimates (primal, dx, dy = (A + B)/2) are not stored:
+  // tgpt_frame_estimate() forms them from the passes, which saves 7 of ~20
+  // RGB layers per buffered frame (stage 2 holds about W frames).
   L.add("direct", kRgb, average(a.direct, b.direct, 0.5f));
   L.add("shift_failure_rate", {"Y"}, average(a.shift_failure_rate, b.shift_failure_rate, 0.5f));
-  // Var((A + B)/2) = (Var A + Var B)/4 for independent streams.
-  L.add("primal_var", kRgb, average(a.primal_var, b.primal_var, 0.25f));
-  L.add("dx_var", kRgb, average(a.dx_var, b.dx_var, 0.25f));
-  L.add("dy_var", kRgb, average(a.dy_var, b.dy_var, 0.25f));
   // ---- The passes, for the temporal differences of stage 2 ----
   for (auto [prefix, p] : {std::pair<const char*, GradientFilmBuffers*>{"a_", &a}, {"b_", &b}}) {
     const std::string s = prefix;
@@ -63,7 +58,7 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
     if (!l) return invalid_argument(std::string("tgpt: ") + which + " frame's buffers lack the '" + name + "' layer");
     return &l->image;
   };
-  auto primal = need(t, "primal", "this");
+  auto primal = need(t, "b_primal", "this");
   if (!primal.ok()) return primal.status();
   const int w = primal.value()->width(), h = primal.value()->height();
   TemporalGradients g;
@@ -108,15 +103,27 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
   return g;
 }
 
+Expected<Image> tgpt_frame_estimate(const LayeredImage& t, const std::string& name) {
+  const ImageLayer* a = t.find("a_" + name);
+  const ImageLayer* b = t.find("b_" + name);
+  if (!a || !b) return invalid_argument("tgpt: frame buffers lack 'a_" + name + "' or 'b_" + name + "'");
+  if (a->image.data().size() != b->image.data().size())
+    return invalid_argument("tgpt: passes of '" + name + "' differ in size");
+  // Mean of the two independent passes; Var((A + B)/2) = (Var A + Var B)/4.
+  const bool variance = name.size() > 4 && name.compare(name.size() - 4, 4, "_var") == 0;
+  return average(a->image, b->image, variance ? 0.25f : 0.5f);
+}
+
 Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, const TemporalGradients* temporal) {
   GradientFrame gf;
   const std::pair<Term, const char*> spatial[3] = {{Term::kPrimal, "primal"}, {Term::kDx, "dx"}, {Term::kDy, "dy"}};
   for (auto [term, name] : spatial) {
-    const ImageLayer* v = t.find(name);
-    const ImageLayer* var = t.find(std::string(name) + "_var");
-    if (!v || !var) return invalid_argument(std::string("tgpt: frame buffers lack the '") + name + "' layer or its variance");
-    gf.buffer(term) = v->image;
-    gf.variance(term) = var->image;
+    auto v = tgpt_frame_estimate(t, name);
+    auto var = tgpt_frame_estimate(t, std::string(name) + "_var");
+    if (!v.ok()) return v.status();
+    if (!var.ok()) return var.status();
+    gf.buffer(term) = std::move(v.value());
+    gf.variance(term) = std::move(var.value());
   }
   if (temporal) {
     gf.buffer(Term::kDt) = temporal->dt;

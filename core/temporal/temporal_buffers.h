@@ -2,10 +2,11 @@
 // (STYLE.md: named buffers, not magic indices).
 //
 // Stage 1 stores per frame (tgpt_frame_layers): both half passes
-// ("a_primal", "a_dx", "a_dy", "b_…", with "_var" variances), their average
-// under the G-PT names ("primal", "dx", "dy", "direct", "*_var",
-// "shift_failure_rate"), and the motion fields "motion" (towards the next
-// frame) and "motion_back" (towards the previous one). A frame carries
+// ("a_primal", "a_dx", "a_dy", "b_…", with "_var" variances), the averaged
+// "direct" and "shift_failure_rate", and the motion fields "motion" (towards
+// the next frame) and "motion_back" (towards the previous one). The frame's
+// primal, dx, dy and variances are formed from the passes when needed
+// (tgpt_frame_estimate). A frame carries
 // "motion" if and only if the pair (t, t_next) changes: its absence is how
 // stage 2, which sees only buffers, knows the pair is static.
 //
@@ -19,6 +20,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "core/image/image.h"
@@ -43,6 +45,10 @@ struct TemporalGradients {
 // Frame t's buffers and the next frame's; kInvalidArgument names a missing layer.
 Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const LayeredImage& next,
                                                const TgptSettings& settings);
+
+// The frame's estimate `name` ("primal", "dx", "dy" or one of their "_var")
+// from its two passes: (A + B)/2, variances (Var A + Var B)/4.
+Expected<Image> tgpt_frame_estimate(const LayeredImage& t, const std::string& name);
 
 // The reconstruction's view of frame t: primal, dx, dy (and variances) from
 // the buffers, plus dt, dxdt, dydt when `temporal` is given (with its mask on

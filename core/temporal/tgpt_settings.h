@@ -14,8 +14,8 @@ namespace gdvr {
 
 struct TgptSettings {
   // The spatial sampler of both half passes (its `recon` is ignored: the
-  // window solve below uses `recon`).
-  GptSettings gpt = GptSettings::defaults_for(ShiftMapping::kReconnect);
+  // window solve below uses `recon`). See gpt_defaults_for().
+  GptSettings gpt = gpt_defaults_for(ShiftMapping::kReconnect);
 
   // ---- Motion vectors (primary-hit reprojection, REFERENCE.md §4) ----
   // Off: every temporal constraint is kept (same-pixel dt is unbiased anyway).
@@ -34,6 +34,17 @@ struct TgptSettings {
   int window = 20;  // W ≥ 1; W = 1 is spatial G-PT
   int hop = 0;      // H, frames between window starts; 0 = max(1, W/2)
   int effective_hop() const { return hop > 0 ? hop : (window / 2 > 0 ? window / 2 : 1); }
+
+  // G-PT's defaults for `shift`, but with cached-path Russian roulette off:
+  // docs/gpt.md measured that RR multiplies the gradient variance ~13× on cbox
+  // and that L2 at equal time is 1.6× better without it (0.00068 vs 0.00112);
+  // T-GPT reconstructs with L2 by default and its dxdt, dydt inherit the
+  // spatial gradients' noise.
+  static GptSettings gpt_defaults_for(ShiftMapping shift) {
+    GptSettings g = GptSettings::defaults_for(shift);
+    g.cached_rr = false;
+    return g;
+  }
 
   Status validate() const;  // names the offending field
   std::string to_string() const;

@@ -12,6 +12,7 @@
 //   RSS (run twice with different --shot to see memory is constant).
 //
 //   gdvr-bench-tgpt --quality [--res 64] [--frames 24] [--spp 8] [--ref-spp 2048] [--runs 3] [--window 20]
+//                   [--ref-cache /tmp/tgpt_ref]   (reference EXRs written once, then read)
 //   gdvr-bench-tgpt --recon [--width 1280 --height 720] [--shot 40] [--window 20] [--method l2]
 // Run from the repository root (or pass --demo PATH to the job file).
 #include <algorithm>
@@ -26,6 +27,9 @@
 #include <string>
 #include <vector>
 
+#include <sys/resource.h>
+
+#include "core/io/image_io.h"
 #include "core/job/job_runner.h"
 #include "core/recon/recon_settings.h"
 #include "core/temporal/stream_schedule.h"
@@ -43,9 +47,19 @@ struct Args {
   int res = 64, frames = 24, spp = 8, ref_spp = 2048, runs = 3, window = 20, threads = 2;
   int width = 1280, height = 720, shot = 40;
   std::string method = "l2";
+  std::string ref_cache;  // prefix of cached reference EXRs (computed once, reused)
 };
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// CPU seconds of this process (user + system, all threads): on the shared,
+// overloaded 2-core machine wall time swings ±50 % with other engineers'
+// builds, CPU time much less; equal-time budgets are set on CPU time.
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
 
 double peak_rss_mib() {
   std::ifstream f("/proc/self/status");
@@ -65,7 +79,7 @@ double median(std::vector<double> v) {
 
 struct SequenceRun {
   std::vector<Image> frames;
-  double seconds = 0, recon_seconds = 0;
+  double seconds = 0, cpu = 0, recon_seconds = 0;
   int spp = 0;
 };
 
@@ -81,15 +95,18 @@ Expected<SequenceRun> run_sequence(JobSpec job, const std::string& base_dir, int
     run.spp = f.stats.spp;
   };
   const auto t0 = Clock::now();
+  const double c0 = cpu_seconds();
   Status st = run_job(job, options, cb, nullptr);
   if (!st.ok()) return st;
   run.seconds = seconds_since(t0);
+  run.cpu = cpu_seconds() - c0;
   return run;
 }
 
 struct Errors {
   std::vector<double> rel_mse;  // per-pixel form, per frame
   double rel_mse_mean = 0, global_rel_mse = 0, flicker = 0;
+  double rel_flicker = 0;  // the same, per pixel relative to ref² + 0.01 (as the per-pixel relMSE)
 };
 
 Errors errors(const std::vector<Image>& img, const std::vector<Image>& ref) {
@@ -111,12 +128,15 @@ Errors errors(const std::vector<Image>& img, const std::vector<Image>& ref) {
   e.global_rel_mse = den > 0 ? num / den : 0;
   // Flicker (REFERENCE.md §7): mean squared frame-to-frame change of the error.
   for (size_t t = 0; t + 1 < img.size(); ++t) {
-    double s = 0;
+    double s = 0, rs = 0;
     for (size_t k = 0; k < img[t].data().size(); ++k) {
       const double d = (double(img[t + 1].data()[k]) - ref[t + 1].data()[k]) - (double(img[t].data()[k]) - ref[t].data()[k]);
       s += d * d;
+      const double r = 0.5 * (double(ref[t].data()[k]) + ref[t + 1].data()[k]);
+      rs += d * d / (r * r + 0.01);
     }
     e.flicker += s / double(img[t].data().size()) / double(img.size() - 1);
+    e.rel_flicker += rs / double(img[t].data().size()) / double(img.size() - 1);
   }
   return e;
 }
@@ -147,19 +167,46 @@ int quality(const Args& a) {
   ref_job.integrator = "pt";
   ref_job.spp = a.ref_spp;
   ref_job.seed = 987654321;
-  auto ref = run_sequence(ref_job, base_dir, a.threads);
-  if (!ref.ok()) {
-    std::fprintf(stderr, "%s\n", ref.status().to_string().c_str());
-    return 1;
+  SequenceRun reference;
+  auto cache_name = [&](int t) {
+    return a.ref_cache + "_" + std::to_string(a.res) + "_" + std::to_string(a.ref_spp) + "spp_" + std::to_string(t) + ".exr";
+  };
+  for (int t = 0; !a.ref_cache.empty() && t < a.frames; ++t) {
+    auto img = read_exr(cache_name(t));
+    if (!img.ok() || !img->find("")) break;
+    reference.frames.push_back(img->find("")->image);
   }
-  std::printf("reference: PT %d spp, %.1f s\n", a.ref_spp, ref->seconds);
+  if (int(reference.frames.size()) == a.frames) {
+    std::printf("reference: PT %d spp, read from %s_*\n", a.ref_spp, a.ref_cache.c_str());
+  } else {
+    auto ref = run_sequence(ref_job, base_dir, a.threads);
+    if (!ref.ok()) {
+      std::fprintf(stderr, "%s\n", ref.status().to_string().c_str());
+      return 1;
+    }
+    reference = std::move(ref.value());
+    std::printf("reference: PT %d spp, %.1f s\n", a.ref_spp, reference.seconds);
+    for (int t = 0; !a.ref_cache.empty() && t < a.frames; ++t) {
+      LayeredImage L;
+      L.add("", {"R", "G", "B"}, reference.frames[size_t(t)]);
+      if (!write_exr(cache_name(t), L).ok()) std::fprintf(stderr, "cannot write %s\n", cache_name(t).c_str());
+    }
+  }
+  const SequenceRun* ref = &reference;
 
   // ---- Calibrate: seconds per spp (render) and the fixed reconstruction cost per method ----
-  const std::vector<std::string> methods = {"tgpt", "gpt", "pt"};
+  // tgpt-w1: the same two half passes, each frame reconstructed alone (W = 1):
+  // frame-by-frame G-PT with T-GPT's sampler, so tgpt vs tgpt-w1 isolates the
+  // temporal terms; gpt: the G-PT integrator with its own defaults.
+  const std::vector<std::string> methods = {"tgpt", "tgpt-w1", "gpt", "pt"};
+  auto configure = [&](JobSpec* job, const std::string& m) {
+    job->integrator = m == "tgpt-w1" ? "tgpt" : m;
+    job->reconstruction.window = m == "tgpt-w1" ? 1 : a.window;
+  };
   std::map<std::string, double> per_spp, fixed;
   for (const std::string& m : methods) {
     JobSpec job = base;
-    job.integrator = m;
+    configure(&job, m);
     job.spp = a.spp;
     job.seed = 17;
     auto r = run_sequence(job, base_dir, a.threads);
@@ -167,23 +214,24 @@ int quality(const Args& a) {
       std::fprintf(stderr, "%s: %s\n", m.c_str(), r.status().to_string().c_str());
       return 1;
     }
+    // Reconstruction is single-stream-ish; count its wall time as CPU time too.
     fixed[m] = r->recon_seconds;
-    per_spp[m] = std::max(1e-6, r->seconds - r->recon_seconds) / a.spp;
-    std::printf("calibration %-4s: %d spp %.2f s (reconstruction %.2f s)\n", m.c_str(), a.spp, r->seconds,
-                r->recon_seconds);
+    per_spp[m] = std::max(1e-6, r->cpu - r->recon_seconds) / a.spp;
+    std::printf("calibration %-7s: %d spp %.2f s wall, %.2f s CPU (reconstruction %.2f s)\n", m.c_str(), a.spp,
+                r->seconds, r->cpu, r->recon_seconds);
   }
   const double budget = fixed["tgpt"] + per_spp["tgpt"] * a.spp;
   std::map<std::string, int> spp;
   for (const std::string& m : methods)
-    spp[m] = std::max(m == "tgpt" ? 2 : 1, int(std::lround((budget - fixed[m]) / per_spp[m])));
+    spp[m] = std::max(m.rfind("tgpt", 0) == 0 ? 2 : 1, int(std::lround((budget - fixed[m]) / per_spp[m])));
   spp["tgpt"] = a.spp;
 
-  std::map<std::string, std::vector<double>> rel, glob, flick, secs;
+  std::map<std::string, std::vector<double>> rel, glob, flick, rflick, secs, cpus;
   std::map<std::string, std::vector<std::vector<double>>> per_frame;
   for (int run = 0; run < a.runs; ++run)
     for (const std::string& m : methods) {
       JobSpec job = base;
-      job.integrator = m;
+      configure(&job, m);
       job.spp = spp[m];
       job.seed = 1000 + 31 * uint64_t(run);
       auto r = run_sequence(job, base_dir, a.threads);
@@ -195,17 +243,21 @@ int quality(const Args& a) {
       rel[m].push_back(e.rel_mse_mean);
       glob[m].push_back(e.global_rel_mse);
       flick[m].push_back(e.flicker);
+      rflick[m].push_back(e.rel_flicker);
       secs[m].push_back(r->seconds);
+      cpus[m].push_back(r->cpu);
       per_frame[m].push_back(e.rel_mse);
-      std::printf("run %d %-4s %3d spp: %.2f s  relMSE %.5f  global %.5f  flicker %.3e\n", run, m.c_str(), r->spp,
-                  r->seconds, e.rel_mse_mean, e.global_rel_mse, e.flicker);
+      std::printf("run %d %-7s %3d spp: %.2f s wall %.2f s CPU  relMSE %.5f  global %.5f  flicker %.3e  rel. flicker %.5f\n", run,
+                  m.c_str(), r->spp, r->seconds, r->cpu, e.rel_mse_mean, e.global_rel_mse, e.flicker, e.rel_flicker);
     }
-  std::printf("\n| method | spp | wall s (median) | relMSE per-pixel | relMSE global | flicker | relMSE / T-GPT's | flicker / T-GPT's |\n");
-  std::printf("|---|---|---|---|---|---|---|---|\n");
+  std::printf("\n| method | spp | wall s (median) | CPU s (median) | relMSE per-pixel | relMSE global | flicker | rel. flicker | "
+              "relMSE / T-GPT's | flicker / T-GPT's | rel. flicker / T-GPT's |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& m : methods)
-    std::printf("| %s | %d | %.2f | %.5f | %.5f | %.3e | %.2f | %.2f |\n", m.c_str(), spp[m], median(secs[m]),
-                median(rel[m]), median(glob[m]), median(flick[m]), median(rel[m]) / median(rel["tgpt"]),
-                median(flick[m]) / median(flick["tgpt"]));
+    std::printf("| %s | %d | %.2f | %.2f | %.5f | %.5f | %.3e | %.5f | %.2f | %.2f | %.2f |\n", m.c_str(), spp[m],
+                median(secs[m]), median(cpus[m]), median(rel[m]), median(glob[m]), median(flick[m]), median(rflick[m]),
+                median(rel[m]) / median(rel["tgpt"]), median(flick[m]) / median(flick["tgpt"]),
+                median(rflick[m]) / median(rflick["tgpt"]));
   std::printf("\nper-frame relMSE (per-pixel form), median over runs:\nframe");
   for (const std::string& m : methods) std::printf(" %8s", m.c_str());
   std::printf("\n");
@@ -250,16 +302,6 @@ LayeredImage synthetic_frame(int w, int h, int t, int n, std::mt19937& rng) {
     L.add(pre + "primal_var", rgb, var);
     L.add(pre + "dx_var", rgb, var);
     L.add(pre + "dy_var", rgb, std::move(var));
-  }
-  // Averages under the G-PT names, as tgpt_frame_layers stores them.
-  for (const char* n : {"primal", "dx", "dy"}) {
-    Image avg = L.find(std::string("a_") + n)->image;
-    const Image& b = L.find(std::string("b_") + n)->image;
-    for (size_t k = 0; k < avg.data().size(); ++k) avg.data()[k] = 0.5f * (avg.data()[k] + b.data()[k]);
-    L.add(n, rgb, std::move(avg));
-    Image v(w, h, 3);
-    for (float& x : v.data()) x = 0.005f;
-    L.add(std::string(n) + "_var", rgb, std::move(v));
   }
   L.add("direct", rgb, Image(w, h, 3));
   Image motion(w, h, 3);
@@ -350,6 +392,7 @@ int main(int argc, char** argv) {
     else if (k == "--height") a.height = std::stoi(next());
     else if (k == "--shot") a.shot = std::stoi(next());
     else if (k == "--method") a.method = next();
+    else if (k == "--ref-cache") a.ref_cache = next();
     else {
       std::fprintf(stderr, "unknown argument %s\n", k.c_str());
       return 2;

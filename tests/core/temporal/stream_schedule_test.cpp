@@ -95,7 +95,7 @@ LayeredImage tiny_frame(int t, int n) {
     for (size_t k = 0; k < im.data().size(); ++k) im.data()[k] = base + 0.01f * float(k % 7);
     return im;
   };
-  for (const char* pre : {"a_", "b_", ""}) {
+  for (const char* pre : {"a_", "b_"}) {
     L.add(std::string(pre) + "primal", rgb, img(0.5f + 0.01f * t));
     L.add(std::string(pre) + "dx", rgb, img(0.0f));
     L.add(std::string(pre) + "dy", rgb, img(0.0f));
