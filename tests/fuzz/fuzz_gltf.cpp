@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -13,14 +14,21 @@
 
 namespace {
 
+// Created once per process, removed at exit. Leaked on purpose: the atexit
+// handler must not outlive a static std::string it reads.
 const std::string& temp_dir() {
-  static const std::string dir = [] {
+  static const std::string* dir = [] {
     char tmpl[] = "/tmp/gdvr_fuzz_gltf_XXXXXX";
     const char* d = mkdtemp(tmpl);
     if (!d) std::abort();
-    return std::string(d);
+    auto* s = new std::string(d);
+    std::atexit([] {
+      std::error_code ec;
+      std::filesystem::remove_all(temp_dir(), ec);
+    });
+    return s;
   }();
-  return dir;
+  return *dir;
 }
 
 }  // namespace
