@@ -8,6 +8,7 @@
 // results.json, plot_*.png, images/ and report.html. Progress on stderr;
 // Ctrl-C cancels (the results so far stay in DIR).
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -162,9 +163,15 @@ int main(int argc, char** argv) {
   // The key numbers on stdout: equal-time ratios at every budget.
   std::printf("%-14s %8s %10s %8s %12s %12s %10s\n", "method", "budget", "s/frame", "spp", "relMSE", "ratio vs PT",
               "flicker");
+  auto num = [](double v, const char* f) {
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), f, v);
+    return std::isfinite(v) ? std::string(buf) : std::string("-");
+  };
   for (const ReportRow& r : report->rows)
-    std::printf("%-14s %8g %10.3f %8.1f %12.4g %12.3g %10.3g\n", r.method.c_str(), r.budget_s, r.seconds_per_frame,
-                r.spp, r.rel_mse_global, r.method == "pt" ? 1.0 : r.equal_time_ratio_global, r.flicker);
+    std::printf("%-14s %8g %10.3f %8.1f %12s %12s %10s\n", r.method.c_str(), r.budget_s, r.seconds_per_frame, r.spp,
+                num(r.rel_mse_global, "%.4g").c_str(),
+                num(r.method == "pt" ? 1.0 : r.equal_time_ratio_global, "%.3g").c_str(), num(r.flicker, "%.3g").c_str());
   std::fprintf(stderr, "gdvr-report: wrote %s\n", report->html_path.c_str());
   return 0;
 }
