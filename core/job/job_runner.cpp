@@ -370,6 +370,21 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
   out.stats = fb.stats;
   out.stats.reconstruct_seconds = recon_stats.seconds;
   out.image.add("", {"R", "G", "B"}, std::move(final_image));
+  auto add_estimate = [&](const char* name) -> Status {
+    auto est = tgpt_frame_estimate(fb.layers, name);
+    if (!est.ok()) return est.status();
+    out.image.add(name, {"R", "G", "B"}, std::move(est.value()));
+    return Status::Ok();
+  };
+  if (n == 1) {
+    // A single-frame job never forms temporal buffers (issue 4): no dt layers.
+    for (const char* name : {"primal", "dx", "dy"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
+    out.image.layers.push_back(*direct);
+    for (const char* name : {"primal_var", "dx_var", "dy_var"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
+    if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
+    out.stats.left_out.push_back("temporal gradients and buffers: single-frame job");
+    return out;
+  }
   // The frame's own temporal layers (towards the next frame of the job).
   TemporalGradients tg;
   if (const LayeredImage* next = layers_at(pos + 1)) {
@@ -381,12 +396,6 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
     for (Image* im : {&tg.dt, &tg.dxdt, &tg.dydt, &tg.dt_var, &tg.dxdt_var, &tg.dydt_var}) *im = Image(w, h, 3);
     tg.failure_rate = Image(w, h, 1);
   }
-  auto add_estimate = [&](const char* name) -> Status {
-    auto est = tgpt_frame_estimate(fb.layers, name);
-    if (!est.ok()) return est.status();
-    out.image.add(name, {"R", "G", "B"}, std::move(est.value()));
-    return Status::Ok();
-  };
   for (const char* name : {"primal", "dx", "dy"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
   out.image.add("dt", {"R", "G", "B"}, std::move(tg.dt));
   out.image.add("dxdt", {"R", "G", "B"}, std::move(tg.dxdt));

@@ -184,6 +184,16 @@ TEST(TgptJobTest, TwoFrameShotAndWindowLongerThanShot) {
   }
 }
 
+TEST(TgptJobTest, SingleFrameJobHasNoTemporalBuffers) {
+  auto out = run(tgpt_job("3", true, 20));
+  ASSERT_EQ(out.size(), 1u);
+  expect_finite_layers(out[0]);
+  for (const char* name : {"dt", "dxdt", "dydt", "temporal_failure_rate", "motion"})
+    EXPECT_EQ(out[0].image.find(name), nullptr) << name;
+  EXPECT_NE(out[0].image.find("primal"), nullptr);
+  EXPECT_TRUE(has(out[0].stats.left_out, "temporal gradients and buffers: single-frame job"));
+}
+
 // Frames come out in order, each as soon as its windows are rendered, and a
 // stand-alone finalize of each frame (a farm's stage 2) gives the same image.
 TEST(TgptJobTest, StreamsInOrderAndStagesAgree) {
