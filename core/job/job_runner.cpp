@@ -1,6 +1,7 @@
 #include "core/job/job_runner.h"
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 #include <set>
@@ -363,12 +364,21 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
   auto solved = cache->reconstruct(pos, layers_at, &recon_stats);
   if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
   Image final_image = std::move(solved.value());
-  for (size_t k = 0; k < final_image.data().size(); ++k) final_image.data()[k] += direct->image.data()[k];
+  // The solve drops non-finite samples; `direct` bypasses it, so drop them here
+  // too (a corrupted farm file must not put NaN into the final image).
+  int64_t bad_direct = 0;
+  for (size_t k = 0; k < final_image.data().size(); ++k) {
+    const float d = direct->image.data()[k];
+    if (std::isfinite(d)) final_image.data()[k] += d;
+    else ++bad_direct;
+  }
 
   FrameOutput out;
   out.frame = frame;
   out.stats = fb.stats;
   out.stats.reconstruct_seconds = recon_stats.seconds;
+  if (bad_direct > 0)
+    out.stats.left_out.push_back(std::to_string(bad_direct) + " non-finite direct-light values dropped");
   out.image.add("", {"R", "G", "B"}, std::move(final_image));
   auto add_estimate = [&](const char* name) -> Status {
     auto est = tgpt_frame_estimate(fb.layers, name);
