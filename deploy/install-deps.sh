@@ -14,7 +14,7 @@ PACKAGES=(
   # scene formats
   libpugixml-dev zlib1g-dev libtinygltf-dev nlohmann-json3-dev
   # service
-  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libsqlite3-dev libssl-dev openssl
   python3-grpcio python3-protobuf python3-numpy python3-setuptools
   # tests
   libgtest-dev libgmock-dev

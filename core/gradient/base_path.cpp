@@ -1,6 +1,7 @@
 #include "core/gradient/base_path.h"
 
 #include "core/math/sampling.h"
+#include "core/render/russian_roulette.h"
 
 namespace gdvr {
 
@@ -90,11 +91,11 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
     const Vec3f d = si.sh_frame.to_world(v.bs.wi);
     ray = si.spawn_ray(d);
 
-    // ---- Russian roulette (Mitsuba's rule, counted after the bounce) ----
+    // ---- Russian roulette (russian_roulette.h; counted after the bounce) ----
     float throughput_max = max_component(beta);
     if (!(throughput_max > 0)) break;
     if (depth + 1 >= settings.rr_depth) {
-      float q = std::min(throughput_max * eta * eta, 0.95f);
+      float q = russian_roulette_survival(throughput_max, eta);
       if (sampler.next_1d() >= q) {
         v.next = PathNext::kKilled;
         v.rr_q = q;

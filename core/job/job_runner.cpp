@@ -338,6 +338,30 @@ namespace {
 // The window solutions are cached in `cache` (run_job keeps one for the whole
 // shot; a stand-alone finalize uses a fresh one and re-solves the windows of
 // its frame, with the same result).
+// Adds the light seen directly from the camera to the solved image. The solve
+// drops non-finite samples; `direct` bypasses it, so drop them here too (a
+// corrupted farm file must not put NaN into the final image). Returns how
+// many values were dropped.
+int64_t add_finite_direct(const Image& direct, Image* final_image) {
+  int64_t bad = 0;
+  for (size_t k = 0; k < final_image->data().size(); ++k) {
+    const float d = direct.data()[k];
+    if (std::isfinite(d)) final_image->data()[k] += d;
+    else ++bad;
+  }
+  return bad;
+}
+
+// The stage-1 layers go into the output as they came, except values that are
+// not finite (only a corrupted buffer file has them): zeroed and counted.
+void zero_non_finite_layers(FrameOutput* out) {
+  int64_t bad = 0;
+  for (ImageLayer& l : out->image.layers)
+    for (float& v : l.image.data())
+      if (!std::isfinite(v)) v = 0.0f, ++bad;
+  if (bad > 0) out->stats.left_out.push_back(std::to_string(bad) + " non-finite buffer values zeroed in the output layers");
+}
+
 Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const std::map<int, FrameBuffers>& buffers,
                                           const std::vector<int>& job_frames, TemporalWindowCache* cache) {
   auto settings = tgpt_settings_for(job);
@@ -364,14 +388,7 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
   auto solved = cache->reconstruct(pos, layers_at, &recon_stats);
   if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
   Image final_image = std::move(solved.value());
-  // The solve drops non-finite samples; `direct` bypasses it, so drop them here
-  // too (a corrupted farm file must not put NaN into the final image).
-  int64_t bad_direct = 0;
-  for (size_t k = 0; k < final_image.data().size(); ++k) {
-    const float d = direct->image.data()[k];
-    if (std::isfinite(d)) final_image.data()[k] += d;
-    else ++bad_direct;
-  }
+  const int64_t bad_direct = add_finite_direct(direct->image, &final_image);
 
   FrameOutput out;
   out.frame = frame;
@@ -393,6 +410,7 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
     for (const char* name : {"primal_var", "dx_var", "dy_var"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
     if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
     out.stats.left_out.push_back("temporal gradients and buffers: single-frame job");
+    zero_non_finite_layers(&out);
     return out;
   }
   // The frame's own temporal layers (towards the next frame of the job).
@@ -426,6 +444,7 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
   if (recon_stats.total_non_finite() > 0)
     out.stats.left_out.push_back(std::to_string(recon_stats.total_non_finite()) +
                                  " non-finite constraints dropped by the reconstruction");
+  zero_non_finite_layers(&out);
   return out;
 }
 
@@ -473,10 +492,12 @@ Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::m
   auto solved = reconstruct_frame(gf, recon);
   if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
   Image final_image = std::move(solved->frames.front());
-  const Image& direct = *layer("direct");
-  for (size_t k = 0; k < final_image.data().size(); ++k) final_image.data()[k] += direct.data()[k];
+  const int64_t bad_direct = add_finite_direct(*layer("direct"), &final_image);
+  if (bad_direct > 0)
+    out.stats.left_out.push_back(std::to_string(bad_direct) + " non-finite direct-light values dropped");
   out.image.add("", {"R", "G", "B"}, std::move(final_image));
   for (const ImageLayer& l : fb.layers.layers) out.image.layers.push_back(l);
+  zero_non_finite_layers(&out);
   out.stats.reconstruct_seconds = solved->stats.seconds;
   if (solved->stats.total_non_finite() > 0)
     out.stats.left_out.push_back(std::to_string(solved->stats.total_non_finite()) +

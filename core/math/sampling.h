@@ -1,6 +1,7 @@
 // Warps from the unit square to directions and surfaces, with their pdfs.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/math/vec.h"
@@ -35,14 +36,18 @@ inline Vec3f square_to_uniform_sphere(Vec2f u) {
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
-// Uniform direction inside a cone around +z with cos(half-angle) = cos_max.
-inline Vec3f square_to_uniform_cone(Vec2f u, float cos_max) {
-  float cos_theta = (1.0f - u.y) + u.y * cos_max;
-  float sin_theta = safe_sqrt(1.0f - cos_theta * cos_theta);
-  float phi = 2.0f * kPi * u.x;
-  return {std::cos(phi) * sin_theta, std::sin(phi) * sin_theta, cos_theta};
+// Cones are described by 1 - cos(half-angle), not by the cosine: for a light
+// that subtends 1e-4 rad, cos rounds to 1 in float and 1 - cos loses every
+// digit, which biased small sphere lights (issue 6, docs/stability.md).
+
+// 1 - cos(asin(sin_alpha)) without cancellation: sin^2 / (1 + cos).
+inline double cone_one_minus_cos(double sin_alpha) {
+  double s2 = std::min(sin_alpha * sin_alpha, 1.0);
+  return s2 / (1.0 + std::sqrt(1.0 - s2));
 }
-inline float uniform_cone_pdf(float cos_max) { return 1.0f / (2.0f * kPi * (1.0f - cos_max)); }
+
+// Solid-angle pdf of a uniform direction in a cone with 1 - cos(half-angle) = one_minus_cos_max.
+inline float uniform_cone_pdf(double one_minus_cos_max) { return float(1.0 / (2.0 * kPi * one_minus_cos_max)); }
 
 // Barycentrics (b1, b2) uniform over a triangle (Heitz 2019 low-distortion map
 // would also do; this is the classic square-root map).

@@ -62,6 +62,7 @@ inline Vec3f normalize(Vec3f v) {
 inline Vec3f min(Vec3f a, Vec3f b) { return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)}; }
 inline Vec3f max(Vec3f a, Vec3f b) { return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)}; }
 inline float max_component(Vec3f v) { return std::max(v.x, std::max(v.y, v.z)); }
+inline float max_abs_component(Vec3f v) { return std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z))); }
 inline bool is_finite(Vec3f v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 // Reflect wi about n (both pointing away from the surface).
 inline Vec3f reflect(Vec3f wi, Vec3f n) { return 2.0f * dot(wi, n) * n - wi; }

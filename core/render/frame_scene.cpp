@@ -223,6 +223,7 @@ bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
     float phi = std::atan2(lo.y, lo.x);
     if (phi < 0) phi += 2.0f * kPi;
     si->uv = {phi * kInvTwoPi, std::acos(std::clamp(lo.z, -1.0f, 1.0f)) * kInvPi};
+    si->offset_floor = std::min(1.0f, max_abs_component(s.center) + s.radius);
   } else {
     const TriangleMesh& m = *s.mesh;
     uint32_t i0 = m.indices[3 * hit.prim], i1 = m.indices[3 * hit.prim + 1], i2 = m.indices[3 * hit.prim + 2];
@@ -230,6 +231,7 @@ bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
     Vec3f p0 = m.positions[i0], p1 = m.positions[i1], p2 = m.positions[i2];
     if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
     si->p = p0 * b0 + p1 * b1 + p2 * b2;
+    si->offset_floor = std::min(1.0f, std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)}));
     si->n = s.instanced ? normalize(s.to_world.normal(s.face_normals[hit.prim])) * s.handedness : s.face_normals[hit.prim];
     ns = shading_normal(s, shape, hit.prim, b1, b2, si->n);
     si->uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
@@ -267,21 +269,27 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
         float dc2 = length_squared(dc);
         float r2 = s.radius * s.radius;
         if (dc2 > r2 * (1.0f + 1e-5f)) {
-          // Outside: sample the cone of directions the sphere subtends.
-          float inv_dc = 1.0f / std::sqrt(dc2);
-          float sin_alpha = s.radius * inv_dc;
-          float cos_alpha = safe_sqrt(1.0f - sin_alpha * sin_alpha);
-          Frame frame(dc * inv_dc);
-          Vec3f local = square_to_uniform_cone(u, cos_alpha);
-          Vec3f d = frame.to_world(local);
-          // Closest intersection of the ray with the sphere.
-          float b = dot(d, dc);
-          float disc = b * b - (dc2 - r2);
-          float t = b - safe_sqrt(disc);
-          p = ref.p + d * t;
-          n = normalize(p - s.center);
+          // Outside: sample the cone of directions the sphere subtends and
+          // place the point on the sphere from the cone angles (pbrt-v4's
+          // construction), in double. Intersecting the sampled ray with the
+          // sphere instead cancels catastrophically in float for a light
+          // 1e-3 of its distance across and put points on the far side
+          // (back-facing: zero radiance, a -0.2 % bias; docs/stability.md).
+          const double sin2_max = double(s.radius) * double(s.radius) / double(dc2);
+          const double sin_max = std::sqrt(sin2_max);
+          const double one_minus_cos_alpha = cone_one_minus_cos(sin_max);
+          const double one_minus_cos = double(u.y) * one_minus_cos_alpha;
+          const double sin2 = one_minus_cos * (2.0 - one_minus_cos);
+          const double cos_theta = 1.0 - one_minus_cos;
+          // Angle at the centre between the reference point and the sampled point.
+          const double cos_c = sin2 / sin_max + cos_theta * std::sqrt(std::max(0.0, 1.0 - sin2 / sin2_max));
+          const double sin_c = std::sqrt(std::max(0.0, 1.0 - cos_c * cos_c));
+          const double phi = 2.0 * kPi * double(u.x);
+          const Frame frame(dc * (1.0f / std::sqrt(dc2)));  // z towards the centre
+          n = normalize(frame.to_world(
+              Vec3f(float(-sin_c * std::cos(phi)), float(-sin_c * std::sin(phi)), float(-cos_c))));
           p = s.center + n * s.radius;
-          pdf_solid_angle = uniform_cone_pdf(cos_alpha);
+          pdf_solid_angle = uniform_cone_pdf(one_minus_cos_alpha);
         } else {
           // Inside (or on) the sphere: uniform area sampling.
           n = square_to_uniform_sphere(u);
@@ -391,9 +399,7 @@ float FrameScene::pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const Su
     Vec3f dc = s.center - ref_p;
     float dc2 = length_squared(dc), r2 = s.radius * s.radius;
     if (dc2 > r2 * (1.0f + 1e-5f)) {
-      float sin_alpha = s.radius / std::sqrt(dc2);
-      float cos_alpha = safe_sqrt(1.0f - sin_alpha * sin_alpha);
-      return uniform_cone_pdf(cos_alpha);
+      return uniform_cone_pdf(cone_one_minus_cos(double(s.radius) / std::sqrt(double(dc2))));
     }
   }
   Vec3f d = hit.p - ref_p;

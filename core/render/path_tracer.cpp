@@ -1,6 +1,7 @@
 #include "core/render/path_tracer.h"
 
 #include "core/math/sampling.h"
+#include "core/render/russian_roulette.h"
 
 namespace gdvr {
 
@@ -83,11 +84,11 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
     prev_bsdf_pdf = bs.pdf;
     prev_bsdf_delta = bs.is_delta();
 
-    // ---- Russian roulette (Mitsuba's rule, counted after the bounce) ----
+    // ---- Russian roulette (russian_roulette.h; counted after the bounce) ----
     float throughput_max = max_component(throughput);
     if (!(throughput_max > 0)) break;
     if (depth + 1 >= settings.rr_depth) {
-      float q = std::min(throughput_max * eta * eta, 0.95f);
+      float q = russian_roulette_survival(throughput_max, eta);
       if (sampler.next_1d() >= q) break;
       throughput *= 1.0f / q;
     }

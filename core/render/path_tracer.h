@@ -2,7 +2,7 @@
 // combined by the power heuristic (REFERENCE.md §1), written to match Mitsuba
 // 3's `path` integrator: max_depth counts path segments (1 = emitters seen
 // directly, -1 = unbounded), Russian roulette from rr_depth with survival
-// min(max(throughput) * eta^2, 0.95).
+// min(max(throughput) * eta^2, 1) (russian_roulette.h: Mitsuba caps it at 0.95).
 #pragma once
 
 #include <cstdint>

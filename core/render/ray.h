@@ -11,7 +11,10 @@ namespace gdvr {
 
 constexpr float kInfinity = std::numeric_limits<float>::infinity();
 // Mitsuba's ray epsilons (float): offsets scale with the magnitude of the
-// position, so scenes at 1e-4 and 1e5 scale both work.
+// position. Mitsuba floors that magnitude at 1, which makes offsets of 1e-4
+// in a scene 1e-4 across; gdvr floors it at the magnitude of the hit
+// primitive instead (SurfaceInteraction::offset_floor), so scenes at 1e-4
+// and at 1e5 scale both work and unit-scale scenes offset exactly as Mitsuba.
 constexpr float kRayEpsilon = 8.940697e-05f;   // 1500 float ulps at 1
 constexpr float kShadowEpsilon = kRayEpsilon * 10.0f;
 
@@ -29,10 +32,13 @@ struct SurfaceInteraction {
   int shape = -1;
   uint32_t prim = 0;
   Vec3f wi;         // direction towards the ray origin, in the shading frame
+  // min(1, largest coordinate magnitude of the hit primitive): the scale of
+  // the floating-point error in p (set by FrameScene::intersect).
+  float offset_floor = 1.0f;
 
   // Offset origin for a ray leaving in direction d (Mitsuba's offset_p).
   Vec3f offset_p(Vec3f d) const {
-    float mag = (1.0f + max_component(Vec3f(std::abs(p.x), std::abs(p.y), std::abs(p.z)))) * kRayEpsilon;
+    float mag = (offset_floor + max_abs_component(p)) * kRayEpsilon;
     if (dot(n, d) < 0) mag = -mag;
     return p + n * mag;
   }

@@ -153,6 +153,7 @@ TEST_P(StiffInjectTest, NonFiniteBuffersNeverReachTheOutput) {
     size_t bad = 0;
     for (float v : id.data()) bad += !std::isfinite(v);
     EXPECT_EQ(bad, 0u) << "final image of frame " << frame;
+    EXPECT_EQ(non_finite_layers(*d), "") << "every output layer of frame " << frame;
     bool reported = false;
     for (const std::string& s : d->stats.left_out) reported |= s.find("non-finite") != std::string::npos;
     EXPECT_TRUE(reported) << "dropped constraints must be counted in left_out";

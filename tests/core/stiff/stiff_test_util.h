@@ -90,6 +90,7 @@ struct StiffCase {
   int spp_ref = 512;
   double scale = 1;  // scene scale (camera motion of the tgpt animation scales with it)
   bool black = false;  // analytic answer: every layer exactly zero
+  double uniform = 0;  // > 0: analytic answer, this radiance in every pixel (the reference)
 };
 
 inline std::vector<StiffCase> stiff_cases() {
@@ -97,14 +98,16 @@ inline std::vector<StiffCase> stiff_cases() {
   v.push_back({"tiny_light", "tiny_light.xml", {}, 16, 8, 512});
   v.push_back({"rough_conductor", "rough_conductor.xml", {}, 16, 8, 4096});
   v.push_back({"mirror", "mirror.xml", {}, 16, 8, 4096});
-  v.push_back({"glass", "glass.xml", {}, 16, 8, 4096});
+  // Caustics through glass: heavy-tailed noise, so the convergence check starts at 16 spp.
+  v.push_back({"glass", "glass.xml", {}, 16, 16, 4096});
   v.push_back({"tir", "tir.xml", {}, 16, 16, 1024});
   v.push_back({"grazing", "grazing.xml", {}, 16, 8, 512});
   v.push_back({"inside_object", "inside_object.xml", {}, 16, 4, 16, 1, /* black = */ true});
   v.push_back({"scale_1em4", "scaled.xml", {{"s", "1e-4"}, {"near", "1e-7"}, {"far", "1"}}, 16, 8, 2048, 1e-4});
   v.push_back({"scale_1e5", "scaled.xml", {{"s", "1e5"}, {"near", "100"}, {"far", "1e9"}}, 16, 8, 2048, 1e5});
   v.push_back({"degenerate_mesh", "degenerate.xml", {}, 16, 8, 512});
-  v.push_back({"furnace_depth1000", "furnace.xml", {}, 16, 8, 256});
+  // Le (1 - rho^1000) / (1 - rho), rho = 0.99: a PT reference would be noisier than G-PT at 128 spp.
+  v.push_back({"furnace_depth1000", "furnace.xml", {}, 16, 8, 0, 1, false, (1.0 - std::pow(0.99, 1000)) / 0.01});
   v.push_back({"hdr_sun_envmap", "envmap_sun.xml", {}, 16, 8, 512});
   v.push_back({"all_shifts_fail", "checker.xml", {}, 16, 8, 256});
   return v;
@@ -207,6 +210,11 @@ inline const std::vector<Image>& pt_reference(const StiffCase& c, bool animated)
   const std::string key = std::string(c.name) + (animated ? "@anim" : "@still");
   auto it = cache.find(key);
   if (it != cache.end()) return it->second;
+  if (c.uniform > 0) {
+    Image img(c.res, c.res, 3);
+    for (float& v : img.data()) v = float(c.uniform);
+    return cache[key] = std::vector<Image>(animated ? 2 : 1, img);
+  }
   JobSpec job = make_job(c, animated ? Integ::kTgpt : Integ::kPt, c.spp_ref, 987654321);
   job.integrator = "pt";
   std::vector<Image> ref;
