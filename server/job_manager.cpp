@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "core/io/image_io.h"
+#include "core/report/error_metrics.h"
 #include "server/job_outputs.h"
 #include "server/log.h"
 #include "server/status_map.h"
@@ -425,11 +426,14 @@ void JobManager::run(Job* job) {
     rec.stats.set_frame(out.frame);
     // The preview is written before the frame is persisted, so every frame a
     // restart treats as final has its preview too.
-    double rel = -1;
+    JobOutputs::FrameErrors errors;
     std::vector<std::string> notes;
-    st = outputs->prepare_frame(out.frame, out.image, &rel, &notes);
+    st = outputs->prepare_frame(out.frame, out.image, &errors, &notes);
     if (!st.ok()) return fail_run(st.with_context("frame " + std::to_string(out.frame) + " outputs: "));
-    rec.stats.set_rel_mse(rel);
+    rec.stats.set_rel_mse(errors.rel_mse);
+    rec.stats.set_rel_mse_global(errors.rel_mse_global);
+    const ImageLayer* failures = out.image.find("shift_failure_rate");
+    rec.stats.set_shift_failure_rate(failures ? mean_finite(failures->image) : -1.0);
     for (auto& n : notes) rec.stats.add_left_out(n);
     // Persist before announcing: a watcher must never be told about a frame
     // that a restart would forget.

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "core/io/image_io.h"
+#include "core/report/error_metrics.h"
 
 namespace gdvr::server {
 namespace fs = std::filesystem;
@@ -71,20 +72,6 @@ const Image* main_rgb(const LayeredImage& image) {
   for (const auto& l : image.layers)
     if (l.image.channels() >= 3) return &l.image;
   return nullptr;
-}
-
-double rel_mse(const Image& image, const Image& reference) {
-  if (image.width() != reference.width() || image.height() != reference.height() || image.channels() < 3 ||
-      reference.channels() < 3 || image.pixel_count() == 0)
-    return -1;
-  double sum = 0;
-  for (int y = 0; y < image.height(); ++y)
-    for (int x = 0; x < image.width(); ++x)
-      for (int c = 0; c < 3; ++c) {
-        double r = reference.at(x, y, c), d = double(image.at(x, y, c)) - r;
-        sum += d * d / (r * r + 0.01);
-      }
-  return sum / (double(image.pixel_count()) * 3);
 }
 
 void remove_stale_temporaries(const std::string& dir) {
@@ -157,8 +144,9 @@ JobOutputs::~JobOutputs() = default;  // an unclosed encoder deletes its partial
 
 int64_t JobOutputs::video_frames() const { return video_ ? video_->frames_written() : 0; }
 
-Status JobOutputs::prepare_frame(int frame, const LayeredImage& image, double* rel, std::vector<std::string>* left_out) {
-  *rel = -1;
+Status JobOutputs::prepare_frame(int frame, const LayeredImage& image, FrameErrors* errors,
+                                 std::vector<std::string>* left_out) {
+  *errors = FrameErrors{};
   const Image* rgb = main_rgb(image);
   if (!rgb) return internal_error("frame " + std::to_string(frame) + " has no RGB layer");
   if (transform_) {
@@ -182,11 +170,13 @@ Status JobOutputs::prepare_frame(int frame, const LayeredImage& image, double* r
     if (!ref) {
       left_out->push_back("relMSE: no readable reference for frame " + std::to_string(frame));
     } else {
-      *rel = rel_mse(*rgb, *ref);
-      if (*rel < 0)
-        left_out->push_back("relMSE: reference is " + std::to_string(ref->width()) + "x" +
-                            std::to_string(ref->height()) + ", the frame " + std::to_string(rgb->width()) + "x" +
-                            std::to_string(rgb->height()));
+      auto sums = rel_mse_sums(*rgb, *ref);
+      if (!sums.ok()) {
+        left_out->push_back("relMSE: " + sums.status().message());
+      } else {
+        errors->rel_mse = sums->per_pixel();
+        errors->rel_mse_global = sums->global();
+      }
     }
   }
   return Status::Ok();

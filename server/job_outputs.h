@@ -33,10 +33,6 @@ std::string video_file_name(const std::string& codec);
 // asset root.
 std::string reference_path(const std::string& asset_root, const std::string& reference, int frame);
 
-// relMSE of the first three channels: mean of (x - r)^2 / (r^2 + 0.01), the
-// measure of the Mitsuba agreement tests. -1 when the sizes differ.
-double rel_mse(const Image& image, const Image& reference);
-
 // The main RGB image of a frame: the unnamed layer, else the first layer with
 // three or more channels; nullptr when there is none.
 const Image* main_rgb(const LayeredImage& image);
@@ -55,9 +51,15 @@ class JobOutputs {
   ~JobOutputs();
 
   // Before the frame is announced: computes the display image, writes the
-  // preview (atomically) and fills `*rel_mse` (-1 without a reference) and
-  // `left_out` notes. The display image is kept for add_to_video().
-  Status prepare_frame(int frame, const LayeredImage& image, double* rel_mse, std::vector<std::string>* left_out);
+  // preview (atomically) and, when the job has a reference, fills `*errors`
+  // with both relMSE forms of core/report/error_metrics.h (the figures
+  // gdvr-report uses); `left_out` says why they are missing. The display image
+  // is kept for add_to_video().
+  struct FrameErrors {
+    double rel_mse = -1;         // per-pixel form; -1: no reference
+    double rel_mse_global = -1;  // global form; -1: no reference
+  };
+  Status prepare_frame(int frame, const LayeredImage& image, FrameErrors* errors, std::vector<std::string>* left_out);
   // After the frame is announced: appends it to the video, first re-encoding
   // any earlier frame of the range not yet in it from its EXR.
   Status add_to_video(int frame);

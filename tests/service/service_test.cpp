@@ -540,8 +540,10 @@ TEST_F(ServiceTest, ReferenceImageRelMseAndCorruptReference) {
   // Frame 1 is the reference itself; frame 2 (other samples) is not.
   // (stats.json holds one compact FrameStats JSON object per frame.)
   EXPECT_NE(stats.find("\"frame\":1,"), std::string::npos) << stats;
-  EXPECT_NE(stats.find("\"rel_mse\":0}"), std::string::npos) << stats;
+  // Both relMSE forms are 0 against itself; a PT frame has no shift-failure rate.
+  EXPECT_NE(stats.find("\"rel_mse\":0,\"rel_mse_global\":0,\"shift_failure_rate\":-1}"), std::string::npos) << stats;
   EXPECT_EQ(stats.find("\"rel_mse\":-1"), std::string::npos) << stats;
+  EXPECT_EQ(stats.find("\"rel_mse_global\":-1"), std::string::npos) << stats;
 
   { std::ofstream(dir_.assets() + "/garbage.exr", std::ios::binary) << "v/1\x01 this is not an OpenEXR file at all"; }
   std::ofstream(dir_.assets() + "/empty.exr").close();
