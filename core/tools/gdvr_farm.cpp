@@ -44,6 +44,7 @@
 #include "core/io/video_encoder.h"
 #include "core/job/job_runner.h"
 #include "core/job/job_spec.h"
+#include "core/tools/cli_args.h"
 
 namespace gdvr {
 namespace {
@@ -85,17 +86,7 @@ Failure fail(const Status& st) {
   return {st.code() == StatusCode::kCancelled ? kExitCancelled : kExitFailed, st.to_string()};
 }
 
-bool parse_int(const std::string& s, long long lo, long long hi, long long* out) {
-  try {
-    size_t pos;
-    long long v = std::stoll(s, &pos);
-    if (pos != s.size() || v < lo || v > hi) return false;
-    *out = v;
-    return true;
-  } catch (...) {
-    return false;
-  }
-}
+using gdvr::tools::parse_int;
 
 std::string numbered(const char* pattern, int frame) {
   char buf[64];

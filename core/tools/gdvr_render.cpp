@@ -17,6 +17,7 @@
 #include "core/io/image_io.h"
 #include "core/job/job_runner.h"
 #include "core/job/job_spec.h"
+#include "core/tools/cli_args.h"
 
 namespace {
 
@@ -32,17 +33,7 @@ int usage(const char* msg) {
   return 2;
 }
 
-bool parse_int(const std::string& s, long long lo, long long hi, long long* out) {
-  try {
-    size_t pos;
-    long long v = std::stoll(s, &pos);
-    if (pos != s.size() || v < lo || v > hi) return false;
-    *out = v;
-    return true;
-  } catch (...) {
-    return false;
-  }
-}
+using gdvr::tools::parse_int;
 
 std::string frame_name(int frame) {
   char buf[32];

@@ -18,6 +18,7 @@
 
 #include "core/io/color_transform.h"
 #include "core/report/error_time_report.h"
+#include "core/tools/cli_args.h"
 
 namespace {
 
@@ -36,17 +37,7 @@ int usage(const char* msg) {
   return 2;
 }
 
-bool parse_int(const std::string& s, long long lo, long long hi, long long* out) {
-  try {
-    size_t pos;
-    long long v = std::stoll(s, &pos);
-    if (pos != s.size() || v < lo || v > hi) return false;
-    *out = v;
-    return true;
-  } catch (...) {
-    return false;
-  }
-}
+using gdvr::tools::parse_int;
 
 std::vector<std::string> split(const std::string& s, char sep) {
   std::vector<std::string> out;
