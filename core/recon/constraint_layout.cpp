@@ -1,7 +1,9 @@
 #include "core/recon/constraint_layout.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <sstream>
@@ -76,28 +78,56 @@ ConstraintLayout build_constraint_layout(const GradientWindow& window) {
   return L;
 }
 
+std::vector<uint8_t> pack_valid_bits(const ConstraintLayout& L) {
+  std::vector<uint8_t> bits(L.grid.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, bits.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (Term term : kAllTerms) {
+      const std::vector<uint8_t>& valid = L.mask(term);
+      if (valid.empty()) continue;
+      const uint8_t bit = uint8_t(1u << term_index(term));
+      for (size_t i = r.begin(); i != r.end(); ++i) bits[i] |= valid[i] ? bit : 0;
+    }
+  });
+  return bits;
+}
+
 namespace {
-Field gather(const GradientWindow& window, const ConstraintLayout& L, Term term, int c, bool variance) {
+void gather(const GradientWindow& window, const ConstraintLayout& L, Term term, int c, bool variance, Field* out) {
   const Grid& g = L.grid;
   const std::vector<uint8_t>& valid = L.mask(term);
-  Field out(g.size(), 0.0f);
-  if (valid.empty()) return out;
+  out->resize(g.size());
+  if (valid.empty()) {
+    std::fill(out->begin(), out->end(), 0.0f);
+    return;
+  }
+  float* o = out->data();
   const int C = L.channels;
   tbb::parallel_for(0, g.frames, [&](int t) {
     const GradientFrame& f = *window.frames[t];
     const Image& img = variance ? f.variance(term) : f.buffer(term);
-    if (img.empty()) return;
-    const float* v = img.data().data();
     const size_t base = size_t(t) * g.frame_size();
-    for (size_t p = 0; p < g.frame_size(); ++p)
-      if (valid[base + p]) out[base + p] = v[p * C + c];
+    if (img.empty()) {
+      std::fill(o + base, o + base + g.frame_size(), 0.0f);
+      return;
+    }
+    const float* v = img.data().data();
+    for (size_t p = 0; p < g.frame_size(); ++p) o[base + p] = valid[base + p] ? v[p * C + c] : 0.0f;
   });
+}
+
+Field gather(const GradientWindow& window, const ConstraintLayout& L, Term term, int c, bool variance) {
+  Field out;
+  gather(window, L, term, c, variance, &out);
   return out;
 }
 }  // namespace
 
 Field gather_term(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c) {
   return gather(window, layout, t, c, /* variance = */ false);
+}
+
+void gather_term(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c, Field* out) {
+  gather(window, layout, t, c, /* variance = */ false, out);
 }
 
 Field gather_variance(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c) {

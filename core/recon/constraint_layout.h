@@ -34,9 +34,16 @@ struct ConstraintLayout {
 // Requires window.validate() to have passed.
 ConstraintLayout build_constraint_layout(const GradientWindow& window);
 
+// One byte per pixel (planar), bit term_index(t) set where constraint t exists:
+// the L2 solver's whole weight state (PoissonSystem's mask mode).
+std::vector<uint8_t> pack_valid_bits(const ConstraintLayout& layout);
+
 // Channel `c` of term `t` in planar layout, 0 where the constraint is invalid
 // (so every value the solvers read is finite).
 Field gather_term(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c);
+// Same into *out (resized), reusing its memory: a 720p window channel is 74 MB,
+// and fresh allocations cost page faults on every solve.
+void gather_term(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c, Field* out);
 // Same for the variances; empty if the term has no variance buffer.
 Field gather_variance(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c);
 

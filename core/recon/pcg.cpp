@@ -31,15 +31,20 @@ Pair reduce_pair(size_t n, Body body) {
 }  // namespace
 
 PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_diag, Field* x_out, int max_iterations,
-                    double tolerance) {
+                    double tolerance, PcgWorkspace* workspace) {
   const size_t n = b.size();
   float* x = x_out->data();
   const float* B = b.data();
   const float* M = inv_diag.data();
-  Field r_f(n), p_f(n), q_f(n);
-  float* r = r_f.data();
-  float* p = p_f.data();
-  float* q = q_f.data();
+  PcgWorkspace local;
+  PcgWorkspace& ws = workspace ? *workspace : local;
+  // Every element is written before it is read (apply writes all of q).
+  ws.r.resize(n);
+  ws.p.resize(n);
+  ws.q.resize(n);
+  float* r = ws.r.data();
+  float* p = ws.p.data();
+  float* q = ws.q.data();
 
   // ---- r = b − A x, p = M r ----
   A.apply(x, q);
@@ -70,6 +75,8 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
     // pq ≤ 0 only from round-off once converged (A is SPD): stop, don't divide.
     if (!(pq > 0) || !std::isfinite(pq)) break;
     const float step = float(rz / pq);
+    // ---- r −= step q, with r·r and r·M·r ----
+    // x += step p is deferred to the p pass below, which reads p anyway.
     const Pair upd = reduce_pair(n, [&](size_t i0, size_t i1) {
       // kLanes independent partial sums: float sums may not be reassociated,
       // so a single accumulator would keep this hot loop scalar.
@@ -78,14 +85,12 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
       size_t i = i0;
       for (; i + kLanes <= i1; i += kLanes)
         for (int j = 0; j < kLanes; ++j) {
-          x[i + j] += step * p[i + j];
           const float ri = r[i + j] - step * q[i + j];
           r[i + j] = ri;
           rr_acc[j] += ri * ri;
           rz_acc[j] += ri * ri * M[i + j];
         }
       for (; i < i1; ++i) {
-        x[i] += step * p[i];
         const float ri = r[i] - step * q[i];
         r[i] = ri;
         rr_acc[0] += ri * ri;
@@ -98,12 +103,21 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
     ++res.iterations;
     rr = upd.first;
     const double rz_new = upd.second;
-    if (!(rz > 0)) break;
-    const float beta = float(rz_new / rz);
+    // ---- x += step p, then (unless this was the last step) p = M r + β p ----
+    const bool last = !(rz > 0) || res.iterations >= max_iterations || rr <= tol2;
+    const float beta = last ? 0.0f : float(rz_new / rz);
     rz = rz_new;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kChunk), [&](const tbb::blocked_range<size_t>& rg) {
-      for (size_t i = rg.begin(); i != rg.end(); ++i) p[i] = M[i] * r[i] + beta * p[i];
+      if (last) {
+        for (size_t i = rg.begin(); i != rg.end(); ++i) x[i] += step * p[i];
+        return;
+      }
+      for (size_t i = rg.begin(); i != rg.end(); ++i) {
+        x[i] += step * p[i];
+        p[i] = M[i] * r[i] + beta * p[i];
+      }
     });
+    if (last) break;
   }
   res.relative_residual = std::sqrt(rr / b_norm2);
   res.converged = rr <= tol2;

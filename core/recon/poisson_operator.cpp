@@ -6,66 +6,156 @@
 
 #include <algorithm>
 #include <functional>
+#include <type_traits>
+#include <utility>
 
 namespace gdvr {
 
 namespace {
 
 constexpr int kChunkPixels = 16384;
+// apply() walks blocks of kBlockRows lines through all frames, so the rows of
+// frames t ± 1 that the temporal stencil reads are still in cache when they
+// become the centre frame (frame-major order streamed p three times from DRAM).
+constexpr int kBlockRows = 16;
 
-// Row pointers for the stencil at (y, t): x[dt + 1][dy + 1] is the row of
-// frame t + dt, line y + dy, clamped into the grid. A clamped row only ever
-// meets a zero weight, so its values never matter (they are finite).
-struct RowCtx {
-  const float* x[3][3];
+// Per-constraint float weights: one row pointer per (term, neighbouring row)
+// the stencil touches. `_u` is line y − 1, `_p` frame t − 1.
+struct FloatWeights {
   const float *wp, *wdx, *wdy, *wdy_u;
   const float *wdt, *wdt_p;
   const float *wdxdt, *wdxdt_p;
   const float *wdydt, *wdydt_u, *wdydt_p, *wdydt_pu;
+
+  float p(int i) const { return wp[i]; }
+  float dx(int i) const { return wdx[i]; }
+  float dy(int i) const { return wdy[i]; }
+  float dy_u(int i) const { return wdy_u[i]; }
+  float dt(int i) const { return wdt[i]; }
+  float dt_p(int i) const { return wdt_p[i]; }
+  float dxdt(int i) const { return wdxdt[i]; }
+  float dxdt_p(int i) const { return wdxdt_p[i]; }
+  float dydt(int i) const { return wdydt[i]; }
+  float dydt_u(int i) const { return wdydt_u[i]; }
+  float dydt_p(int i) const { return wdydt_p[i]; }
+  float dydt_pu(int i) const { return wdydt_pu[i]; }
+};
+
+// Constant per-term weights on packed validity bits: four mask rows replace
+// twelve float weight rows (1–2 streamed bytes per pixel instead of ~36).
+// w·1.0f and w·0.0f are exact, so this gives bit-identical results to
+// FloatWeights filled with the same constants.
+struct MaskWeights {
+  const uint8_t *m, *m_u, *m_p, *m_pu;  // lines (t, y), (t, y−1), (t−1, y), (t−1, y−1)
+  float w[kTermCount];
+  float wp_dropped;
+
+  template <Term kT>
+  float on(const uint8_t* row, int i) const {
+    return w[term_index(kT)] * float((row[i] >> term_index(kT)) & 1);
+  }
+  float p(int i) const { return (m[i] & 1) ? w[0] : wp_dropped; }
+  float dx(int i) const { return on<Term::kDx>(m, i); }
+  float dy(int i) const { return on<Term::kDy>(m, i); }
+  float dy_u(int i) const { return on<Term::kDy>(m_u, i); }
+  float dt(int i) const { return on<Term::kDt>(m, i); }
+  float dt_p(int i) const { return on<Term::kDt>(m_p, i); }
+  float dxdt(int i) const { return on<Term::kDxdt>(m, i); }
+  float dxdt_p(int i) const { return on<Term::kDxdt>(m_p, i); }
+  float dydt(int i) const { return on<Term::kDydt>(m, i); }
+  float dydt_u(int i) const { return on<Term::kDydt>(m_u, i); }
+  float dydt_p(int i) const { return on<Term::kDydt>(m_p, i); }
+  float dydt_pu(int i) const { return on<Term::kDydt>(m_pu, i); }
+};
+
+// The same weights where all four mask rows are constant along the line
+// (everywhere but at the window's borders and dropped samples): broadcast
+// scalars, so the interior of such a line runs the stencil without unpacking
+// bits (about twice as fast; the values are the same, so is the result).
+struct ConstWeights {
+  float wp, wdx, wdy, wdy_u, wdt, wdt_p, wdxdt, wdxdt_p, wdydt, wdydt_u, wdydt_p, wdydt_pu;
+
+  explicit ConstWeights(const MaskWeights& m)
+      : wp(m.p(0)),
+        wdx(m.dx(0)),
+        wdy(m.dy(0)),
+        wdy_u(m.dy_u(0)),
+        wdt(m.dt(0)),
+        wdt_p(m.dt_p(0)),
+        wdxdt(m.dxdt(0)),
+        wdxdt_p(m.dxdt_p(0)),
+        wdydt(m.dydt(0)),
+        wdydt_u(m.dydt_u(0)),
+        wdydt_p(m.dydt_p(0)),
+        wdydt_pu(m.dydt_pu(0)) {}
+  float p(int) const { return wp; }
+  float dx(int) const { return wdx; }
+  float dy(int) const { return wdy; }
+  float dy_u(int) const { return wdy_u; }
+  float dt(int) const { return wdt; }
+  float dt_p(int) const { return wdt_p; }
+  float dxdt(int) const { return wdxdt; }
+  float dxdt_p(int) const { return wdxdt_p; }
+  float dydt(int) const { return wdydt; }
+  float dydt_u(int) const { return wdydt_u; }
+  float dydt_p(int) const { return wdydt_p; }
+  float dydt_pu(int) const { return wdydt_pu; }
+};
+
+// Row pointers for the stencil at (y, t): x[dt + 1][dy + 1] is the row of
+// frame t + dt, line y + dy, clamped into the grid. A clamped row only ever
+// meets a zero weight, so its values never matter (they are finite).
+template <class Weights>
+struct RowCtx {
+  const float* x[3][3];
+  Weights w;
 };
 
 // (A x)(q) gathered from every constraint that touches q (coefficient a_c(q)
 // of x(q) in H_c): y = w_p x + Σ_c a_c(q) w_c (H_c x). `ls` zeroes the
 // constraints left of column 0, `il`/`ir` are the clamped neighbours.
-template <bool kTemporal>
-inline float stencil(const RowCtx& r, int i, int il, int ir, float ls) {
+template <bool kTemporal, class Weights>
+inline float stencil(const RowCtx<Weights>& r, int i, int il, int ir, float ls) {
+  const Weights& w = r.w;
   const float* xc = r.x[1][1];
   const float c = xc[i];
-  float y = r.wp[i] * c;
-  y += r.wdx[i] * (c - xc[ir]) + ls * r.wdx[il] * (c - xc[il]);
-  y += r.wdy[i] * (c - r.x[1][2][i]) + r.wdy_u[i] * (c - r.x[1][0][i]);
+  float y = w.p(i) * c;
+  y += w.dx(i) * (c - xc[ir]) + ls * w.dx(il) * (c - xc[il]);
+  y += w.dy(i) * (c - r.x[1][2][i]) + w.dy_u(i) * (c - r.x[1][0][i]);
   if constexpr (kTemporal) {
     const float* xn = r.x[2][1];
     const float* xp = r.x[0][1];
-    y += r.wdt[i] * (c - xn[i]) + r.wdt_p[i] * (c - xp[i]);
+    y += w.dt(i) * (c - xn[i]) + w.dt_p(i) * (c - xp[i]);
     // H_dxdt at (j, s) = [x(j+1,s+1) − x(j,s+1)] − [x(j+1,s) − x(j,s)]; a = frame s, b = frame s+1.
     const auto hx = [](const float* a, const float* b, int j, int jr) { return (b[jr] - b[j]) - (a[jr] - a[j]); };
-    y += r.wdxdt[i] * hx(xc, xn, i, ir) - ls * r.wdxdt[il] * hx(xc, xn, il, i) - r.wdxdt_p[i] * hx(xp, xc, i, ir) +
-         ls * r.wdxdt_p[il] * hx(xp, xc, il, i);
+    y += w.dxdt(i) * hx(xc, xn, i, ir) - ls * w.dxdt(il) * hx(xc, xn, il, i) - w.dxdt_p(i) * hx(xp, xc, i, ir) +
+         ls * w.dxdt_p(il) * hx(xp, xc, il, i);
     // H_dydt at line y, frame s = [b(y+1) − b(y)] − [a(y+1) − a(y)].
     const auto hy = [i](const float* a, const float* ad, const float* b, const float* bd) {
       return (bd[i] - b[i]) - (ad[i] - a[i]);
     };
-    y += r.wdydt[i] * hy(xc, r.x[1][2], xn, r.x[2][2]) - r.wdydt_u[i] * hy(r.x[1][0], xc, r.x[2][0], xn) -
-         r.wdydt_p[i] * hy(xp, r.x[0][2], xc, r.x[1][2]) + r.wdydt_pu[i] * hy(r.x[0][0], xp, r.x[1][0], xc);
+    y += w.dydt(i) * hy(xc, r.x[1][2], xn, r.x[2][2]) - w.dydt_u(i) * hy(r.x[1][0], xc, r.x[2][0], xn) -
+         w.dydt_p(i) * hy(xp, r.x[0][2], xc, r.x[1][2]) + w.dydt_pu(i) * hy(r.x[0][0], xp, r.x[1][0], xc);
   }
   return y;
 }
 
-template <bool kTemporal>
-float apply_row(const RowCtx& r, int width, const float* p, float* q) {
+// One line of q = A p: `edge` weights for the first and last column, `inner`
+// for the columns between (the interior stencil reads weights at 0..W−2 only).
+template <bool kTemporal, class Edge, class Inner>
+float apply_row(const RowCtx<Edge>& edge, const RowCtx<Inner>& inner, int width, const float* p, float* q) {
   const int W = width;
   if (W == 1) {
-    q[0] = stencil<kTemporal>(r, 0, 0, 0, 0.0f);
+    q[0] = stencil<kTemporal>(edge, 0, 0, 0, 0.0f);
     return p[0] * q[0];
   }
-  q[0] = stencil<kTemporal>(r, 0, 0, 1, 0.0f);
+  q[0] = stencil<kTemporal>(edge, 0, 0, 1, 0.0f);
   // q never aliases the inputs; without this promise GCC gives up on the
   // temporal stencil (more pointers than its runtime alias-check budget) and
   // runs it scalar, 3x slower (measured).
 #pragma GCC ivdep
-  for (int i = 1; i < W - 1; ++i) q[i] = stencil<kTemporal>(r, i, i - 1, i + 1, 1.0f);
-  q[W - 1] = stencil<kTemporal>(r, W - 1, W - 2, W - 1, 1.0f);
+  for (int i = 1; i < W - 1; ++i) q[i] = stencil<kTemporal>(inner, i, i - 1, i + 1, 1.0f);
+  q[W - 1] = stencil<kTemporal>(edge, W - 1, W - 2, W - 1, 1.0f);
   // Eight partial sums so the reduction vectorises (no float reassociation).
   float acc[8] = {};
   int i = 0;
@@ -85,9 +175,34 @@ PoissonSystem::PoissonSystem(Grid grid, bool temporal) : grid_(grid), temporal_(
   zero_row_.assign(size_t(grid_.width), 0.0f);
 }
 
+PoissonSystem::PoissonSystem(Grid grid, bool temporal, const std::array<float, kTermCount>& term_weights,
+                             float dropped_primal_weight, std::vector<uint8_t> valid_bits)
+    : grid_(grid),
+      temporal_(temporal),
+      masked_(true),
+      term_w_(term_weights),
+      dropped_primal_w_(dropped_primal_weight),
+      bits_(std::move(valid_bits)) {
+  if (!temporal_)
+    for (Term t : kAllTerms)
+      if (is_temporal(t)) term_w_[term_index(t)] = 0.0f;
+  zero_bits_.assign(size_t(grid_.width), 0);
+  uniform_rows_.assign(size_t(grid_.rows()), 0);
+  const size_t W = size_t(grid_.width);
+  tbb::parallel_for(0, grid_.rows(), [&](int row) {
+    const uint8_t* m = bits_.data() + row * W;
+    uniform_rows_[row] = W <= 1 || std::all_of(m, m + W - 1, [&](uint8_t v) { return v == m[0]; });
+  });
+}
+
 int PoissonSystem::row_grain() const { return std::max(1, kChunkPixels / std::max(1, grid_.width)); }
 
 double PoissonSystem::apply(const float* p, float* q) const {
+  return masked_ ? apply_impl<MaskWeights>(p, q) : apply_impl<FloatWeights>(p, q);
+}
+
+template <class Weights>
+double PoissonSystem::apply_impl(const float* p, float* q) const {
   const Grid g = grid_;
   const size_t W = size_t(g.width);
   const auto row_of = [&](const float* base, int t, int y) -> const float* {
@@ -96,36 +211,58 @@ double PoissonSystem::apply(const float* p, float* q) const {
     return base + g.index(0, y, t);
   };
   // Weight rows that lie outside the grid are zero: no such constraint.
-  const auto wrow = [&](const Field& w, int t, int y) -> const float* {
+  const auto wrow = [&](Term term, int t, int y) -> const float* {
     if (t < 0 || y < 0) return zero_row_.data();
-    return w.data() + g.index(0, y, t);
+    return weights(term).data() + g.index(0, y, t);
   };
+  const auto mrow = [&](int t, int y) -> const uint8_t* {
+    if (t < 0 || y < 0) return zero_bits_.data();
+    return bits_.data() + g.index(0, y, t);
+  };
+  // Rows outside the grid are zero, hence uniform.
+  const auto uniform = [&](int t, int y) { return t < 0 || y < 0 || uniform_rows_[size_t(t) * g.height + y]; };
+  const int blocks = (g.height + kBlockRows - 1) / kBlockRows;
   return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<int>(0, g.rows(), row_grain()), 0.0,
+      tbb::blocked_range<int>(0, blocks, 1), 0.0,
       [&](const tbb::blocked_range<int>& range, double acc) {
-        for (int row = range.begin(); row != range.end(); ++row) {
-          const int t = row / g.height, y = row % g.height;
-          RowCtx r;
-          for (int dt = -1; dt <= 1; ++dt)
-            for (int dy = -1; dy <= 1; ++dy) r.x[dt + 1][dy + 1] = row_of(p, t + dt, y + dy);
-          r.wp = wrow(weights(Term::kPrimal), t, y);
-          r.wdx = wrow(weights(Term::kDx), t, y);
-          r.wdy = wrow(weights(Term::kDy), t, y);
-          r.wdy_u = wrow(weights(Term::kDy), t, y - 1);
-          if (temporal_) {
-            r.wdt = wrow(weights(Term::kDt), t, y);
-            r.wdt_p = wrow(weights(Term::kDt), t - 1, y);
-            r.wdxdt = wrow(weights(Term::kDxdt), t, y);
-            r.wdxdt_p = wrow(weights(Term::kDxdt), t - 1, y);
-            r.wdydt = wrow(weights(Term::kDydt), t, y);
-            r.wdydt_u = wrow(weights(Term::kDydt), t, y - 1);
-            r.wdydt_p = wrow(weights(Term::kDydt), t - 1, y);
-            r.wdydt_pu = wrow(weights(Term::kDydt), t - 1, y - 1);
-            acc += apply_row<true>(r, g.width, p + row * W, q + row * W);
-          } else {
-            acc += apply_row<false>(r, g.width, p + row * W, q + row * W);
-          }
-        }
+        for (int block = range.begin(); block != range.end(); ++block)
+          for (int t = 0; t < g.frames; ++t)
+            for (int y = block * kBlockRows; y < std::min(g.height, (block + 1) * kBlockRows); ++y) {
+              const size_t row = size_t(t) * g.height + y;
+              RowCtx<Weights> r;
+              for (int dt = -1; dt <= 1; ++dt)
+                for (int dy = -1; dy <= 1; ++dy) r.x[dt + 1][dy + 1] = row_of(p, t + dt, y + dy);
+              if constexpr (std::is_same_v<Weights, MaskWeights>) {
+                r.w = {mrow(t, y), mrow(t, y - 1), mrow(t - 1, y), mrow(t - 1, y - 1), {}, dropped_primal_w_};
+                for (int k = 0; k < kTermCount; ++k) r.w.w[k] = term_w_[k];
+              } else {
+                r.w.wp = wrow(Term::kPrimal, t, y);
+                r.w.wdx = wrow(Term::kDx, t, y);
+                r.w.wdy = wrow(Term::kDy, t, y);
+                r.w.wdy_u = wrow(Term::kDy, t, y - 1);
+                if (temporal_) {
+                  r.w.wdt = wrow(Term::kDt, t, y);
+                  r.w.wdt_p = wrow(Term::kDt, t - 1, y);
+                  r.w.wdxdt = wrow(Term::kDxdt, t, y);
+                  r.w.wdxdt_p = wrow(Term::kDxdt, t - 1, y);
+                  r.w.wdydt = wrow(Term::kDydt, t, y);
+                  r.w.wdydt_u = wrow(Term::kDydt, t, y - 1);
+                  r.w.wdydt_p = wrow(Term::kDydt, t - 1, y);
+                  r.w.wdydt_pu = wrow(Term::kDydt, t - 1, y - 1);
+                }
+              }
+              float* qr = q + row * W;
+              const float* pr = p + row * W;
+              if constexpr (std::is_same_v<Weights, MaskWeights>) {
+                if (uniform(t, y) && uniform(t, y - 1) && uniform(t - 1, y) && uniform(t - 1, y - 1)) {
+                  RowCtx<ConstWeights> c{{}, ConstWeights(r.w)};
+                  std::copy(&r.x[0][0], &r.x[0][0] + 9, &c.x[0][0]);
+                  acc += temporal_ ? apply_row<true>(r, c, g.width, pr, qr) : apply_row<false>(r, c, g.width, pr, qr);
+                  continue;
+                }
+              }
+              acc += temporal_ ? apply_row<true>(r, r, g.width, pr, qr) : apply_row<false>(r, r, g.width, pr, qr);
+            }
         return acc;
       },
       std::plus<double>());
@@ -133,12 +270,12 @@ double PoissonSystem::apply(const float* p, float* q) const {
 
 void PoissonSystem::rhs(const std::array<const Field*, kTermCount>& targets, Field* b) const {
   const Grid g = grid_;
-  b->assign(g.size(), 0.0f);
+  b->resize(g.size());  // every element is written below
   const size_t sx = 1, sy = size_t(g.width), st = g.frame_size();
   // v_c = w_c d_c; b(q) = Σ_c a_c(q) v_c with a_c(q) the coefficient of x(q) in H_c.
   const auto v = [&](Term term, size_t i) -> float {
     const Field* d = targets[term_index(term)];
-    return d ? weights(term)[i] * (*d)[i] : 0.0f;
+    return d ? weight_at(term, i) * (*d)[i] : 0.0f;
   };
   tbb::parallel_for(tbb::blocked_range<int>(0, g.rows(), row_grain()), [&](const tbb::blocked_range<int>& range) {
     for (int row = range.begin(); row != range.end(); ++row) {
@@ -172,7 +309,7 @@ void PoissonSystem::diagonal(Field* d) const {
   const Grid g = grid_;
   d->assign(g.size(), 0.0f);
   const size_t sx = 1, sy = size_t(g.width), st = g.frame_size();
-  const auto w = [&](Term term, size_t i) { return weights(term)[i]; };
+  const auto w = [&](Term term, size_t i) { return weight_at(term, i); };
   tbb::parallel_for(tbb::blocked_range<int>(0, g.rows(), row_grain()), [&](const tbb::blocked_range<int>& range) {
     for (int row = range.begin(); row != range.end(); ++row) {
       const int t = row / g.height, y = row % g.height;

@@ -4,9 +4,11 @@
 //   E(x) = Σ_p w_primal(p) (x(p) − g(p))² + Σ_{term} Σ_p w_term(p) ((H_term x)(p) − d_term(p))²
 //   A = W_primal + Σ H_termᵀ W_term H_term,   b = W_primal g + Σ H_termᵀ W_term d_term.
 //
-// The L2 solve uses per-term constant weights (α² for the primal), the L1
-// IRLS solve per-constraint weights 1/(|r| + ε). A is applied directly on the
-// planar arrays as a 3×3×3 stencil (never assembled), in parallel with TBB.
+// The L2 solve uses per-term constant weights (α² for the primal) on a packed
+// validity mask (one byte per pixel instead of six float arrays: the window
+// solve is memory bound), the L1 IRLS solve per-constraint float weights
+// 1/(|r| + ε). A is applied directly on the planar arrays as a 3×3×3 stencil
+// (never assembled), in parallel with TBB.
 #pragma once
 
 #include <array>
@@ -20,13 +22,20 @@ namespace gdvr {
 
 class PoissonSystem {
  public:
-  // Zero weights for every term; temporal = false ignores dt/dxdt/dydt.
+  // Per-constraint float weights, all zero; temporal = false ignores dt/dxdt/dydt.
   PoissonSystem(Grid grid, bool temporal);
+  // Constant weight per term on a packed mask: bit term_index(t) of valid_bits[i]
+  // says whether constraint t exists at pixel i (it must be clear outside the
+  // image/window, as for the float weights). A cleared primal bit keeps
+  // `dropped_primal_weight` instead of 0.
+  PoissonSystem(Grid grid, bool temporal, const std::array<float, kTermCount>& term_weights,
+                float dropped_primal_weight, std::vector<uint8_t> valid_bits);
 
   const Grid& grid() const { return grid_; }
   bool temporal() const { return temporal_; }
-  // Per-constraint weights, planar; must stay 0 where a constraint does not
-  // exist (last column for dx, last row for dy, last frame for temporal terms).
+  // Per-constraint weights (float mode only), planar; must stay 0 where a
+  // constraint does not exist (last column for dx, last row for dy, last frame
+  // for temporal terms).
   Field& weights(Term t) { return w_[term_index(t)]; }
   const Field& weights(Term t) const { return w_[term_index(t)]; }
 
@@ -41,10 +50,27 @@ class PoissonSystem {
   int row_grain() const;
 
  private:
+  template <class Weights>
+  double apply_impl(const float* p, float* q) const;
+  // Weight of constraint t at pixel i in either mode (setup passes only).
+  float weight_at(Term t, size_t i) const {
+    const int k = term_index(t);
+    if (!masked_) return w_[k][i];
+    const bool on = (bits_[i] >> k) & 1;
+    return on ? term_w_[k] : (t == Term::kPrimal ? dropped_primal_w_ : 0.0f);
+  }
+
   Grid grid_;
   bool temporal_;
-  std::array<Field, kTermCount> w_;
-  Field zero_row_;  // stands in for weight rows outside the grid
+  bool masked_ = false;
+  std::array<Field, kTermCount> w_;        // float mode
+  std::array<float, kTermCount> term_w_{};  // mask mode
+  float dropped_primal_w_ = 0;
+  std::vector<uint8_t> bits_;
+  Field zero_row_;                 // stands in for weight rows outside the grid
+  std::vector<uint8_t> zero_bits_;  // same for mask rows
+  // Per line (t, y): the mask is the same at x = 0..W−2 (ConstWeights apply).
+  std::vector<uint8_t> uniform_rows_;
 };
 
 // (H_t x)(p) − d(p) for every valid constraint of term t (0 elsewhere).

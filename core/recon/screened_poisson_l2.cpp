@@ -13,41 +13,40 @@ namespace gdvr {
 Status solve_screened_poisson_l2(const GradientWindow& window, const ConstraintLayout& layout,
                                  const ReconSettings& settings, ReconResult* result) {
   const Grid& g = layout.grid;
-  PoissonSystem A(g, layout.temporal);
 
   // ---- Weights, shared by all channels ----
-  // Dividing the objective by s = max(1, α²) changes nothing mathematically but
-  // keeps every float weight ≤ 1 for huge α (α² = 1e40 would overflow float).
+  // Constant per term, so the operator keeps one validity byte per pixel
+  // instead of six float arrays. Dividing the objective by s = max(1, α²)
+  // changes nothing mathematically but keeps every float weight ≤ 1 for huge α
+  // (α² = 1e40 would overflow float).
   const double alpha2 = settings.alpha * settings.alpha * settings.term_weight(Term::kPrimal);
   const double s = std::max(1.0, alpha2);
-  for (Term t : kAllTerms) {
-    if (is_temporal(t) && !layout.temporal) continue;
-    Field& w = A.weights(t);
-    const std::vector<uint8_t>& valid = layout.mask(t);
-    const float wt = float((t == Term::kPrimal ? alpha2 : settings.term_weight(t)) / s);
-    if (t == Term::kPrimal) {
-      for (size_t i = 0; i < w.size(); ++i) w[i] = valid[i] ? wt : wt * kDroppedPrimalWeight;
-    } else if (!valid.empty()) {
-      for (size_t i = 0; i < w.size(); ++i) w[i] = valid[i] ? wt : 0.0f;
-    }
-  }
+  std::array<float, kTermCount> w{};
+  for (Term t : kAllTerms)
+    if (!is_temporal(t) || layout.temporal)
+      w[term_index(t)] = float((t == Term::kPrimal ? alpha2 : settings.term_weight(t)) / s);
+  const PoissonSystem A(g, layout.temporal, w, w[term_index(Term::kPrimal)] * kDroppedPrimalWeight,
+                        pack_valid_bits(layout));
   Field inv_diag;
   A.diagonal(&inv_diag);
   invert_diagonal(&inv_diag);
 
   // ---- One independent solve per channel ----
-  Field b;
+  // The buffers are reused across channels (each is grid sized).
+  Field b, x;
+  std::array<Field, kTermCount> d;
+  PcgWorkspace workspace;
   for (int c = 0; c < layout.channels; ++c) {
-    std::array<Field, kTermCount> d;
     std::array<const Field*, kTermCount> targets{};
     for (Term t : kAllTerms)
       if (layout.present(t) && (!is_temporal(t) || layout.temporal)) {
-        d[term_index(t)] = gather_term(window, layout, t, c);
+        gather_term(window, layout, t, c, &d[term_index(t)]);
         targets[term_index(t)] = &d[term_index(t)];
       }
     A.rhs(targets, &b);
-    Field x = d[term_index(Term::kPrimal)];  // warm start: the primal (0 where dropped)
-    const PcgResult r = solve_pcg(A, b, inv_diag, &x, settings.l2_max_iterations, settings.l2_tolerance);
+    x = d[term_index(Term::kPrimal)];  // warm start: the primal (0 where dropped)
+    const PcgResult r =
+        solve_pcg(A, b, inv_diag, &x, settings.l2_max_iterations, settings.l2_tolerance, &workspace);
     result->stats.cg_iterations += r.iterations;
     result->stats.relative_residual = std::max(result->stats.relative_residual, r.relative_residual);
     scatter_channel(g, x, c, result);
