@@ -69,8 +69,9 @@ class PoissonSystem {
   std::vector<uint8_t> bits_;
   Field zero_row_;                 // stands in for weight rows outside the grid
   std::vector<uint8_t> zero_bits_;  // same for mask rows
-  // Per line (t, y): the mask is the same at x = 0..W−2 (ConstWeights apply).
-  std::vector<uint8_t> uniform_rows_;
+  // Per line (t, y) and span of columns: the mask is constant over the columns
+  // that span's stencil reads (ConstWeights apply); all ones for outside lines.
+  std::vector<uint8_t> uniform_spans_, all_uniform_;
 };
 
 // (H_t x)(p) − d(p) for every valid constraint of term t (0 elsewhere).
