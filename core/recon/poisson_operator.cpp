@@ -212,6 +212,7 @@ PoissonSystem::PoissonSystem(Grid grid, bool temporal, const std::array<float, k
     for (Term t : kAllTerms)
       if (is_temporal(t)) term_w_[term_index(t)] = 0.0f;
   zero_bits_.assign(size_t(grid_.width), 0);
+  zero_row_.assign(size_t(grid_.width), 0.0f);
   // Span s of the interior stencil reads mask columns [s·kSpan − 1, (s+1)·kSpan) ∩ [0, W − 1).
   const int W = grid_.width, spans = span_count(W);
   uniform_spans_.assign(size_t(grid_.rows()) * spans, 0);
@@ -315,7 +316,62 @@ double PoissonSystem::apply_impl(const float* p, float* q) const {
       std::plus<double>());
 }
 
+// Mask mode: v_c = w_c d_c with constant w_c and d_c = 0 where constraint c
+// does not exist, so the loop is branch free and vectorises; neighbours
+// outside the grid read a zero row. Same sums in the same order as rhs().
+void PoissonSystem::rhs_masked(const std::array<const Field*, kTermCount>& targets, Field* b) const {
+  const Grid g = grid_;
+  b->resize(g.size());
+  const auto& w = term_w_;
+  tbb::parallel_for(tbb::blocked_range<int>(0, g.rows(), row_grain()), [&](const tbb::blocked_range<int>& range) {
+    for (int row = range.begin(); row != range.end(); ++row) {
+      const int t = row / g.height, y = row % g.height;
+      const auto d = [&](Term term, int dt, int dy) -> const float* {
+        const Field* f = targets[term_index(term)];
+        if (!f || t + dt < 0 || y + dy < 0) return zero_row_.data();
+        return f->data() + g.index(0, y + dy, t + dt);
+      };
+      const float *p = d(Term::kPrimal, 0, 0), *dx = d(Term::kDx, 0, 0), *dy = d(Term::kDy, 0, 0);
+      const float *dy_u = d(Term::kDy, 0, -1), *dt = d(Term::kDt, 0, 0), *dt_p = d(Term::kDt, -1, 0);
+      const float *dxdt = d(Term::kDxdt, 0, 0), *dxdt_p = d(Term::kDxdt, -1, 0);
+      const float *dydt = d(Term::kDydt, 0, 0), *dydt_u = d(Term::kDydt, 0, -1);
+      const float *dydt_p = d(Term::kDydt, -1, 0), *dydt_pu = d(Term::kDydt, -1, -1);
+      const float wp = w[0], wdx = w[1], wdy = w[2], wdt = w[3], wdxdt = w[4], wdydt = w[5];
+      float* out = b->data() + g.index(0, y, t);
+      // il = x − 1 with ls = 0 at x = 0 (no constraint left of column 0).
+      const auto at = [&](auto temporal, int x, int il, float ls) {
+        double s = wp * p[x];
+        s -= wdx * dx[x];
+        s += ls * (wdx * dx[il]);
+        s -= wdy * dy[x];
+        s += wdy * dy_u[x];
+        if constexpr (decltype(temporal)::value) {
+          s -= wdt * dt[x];
+          s += wdt * dt_p[x];
+          s += wdxdt * dxdt[x];
+          s -= ls * (wdxdt * dxdt[il]);
+          s -= wdxdt * dxdt_p[x];
+          s += ls * (wdxdt * dxdt_p[il]);
+          s += wdydt * dydt[x];
+          s -= wdydt * dydt_u[x];
+          s -= wdydt * dydt_p[x];
+          s += wdydt * dydt_pu[x];
+        }
+        out[x] = float(s);
+      };
+      const auto line = [&](auto temporal) {
+        at(temporal, 0, 0, 0.0f);
+#pragma GCC ivdep
+        for (int x = 1; x < g.width; ++x) at(temporal, x, x - 1, 1.0f);
+      };
+      if (temporal_) line(std::true_type{});
+      else line(std::false_type{});
+    }
+  });
+}
+
 void PoissonSystem::rhs(const std::array<const Field*, kTermCount>& targets, Field* b) const {
+  if (masked_) return rhs_masked(targets, b);
   const Grid g = grid_;
   b->resize(g.size());  // every element is written below
   const size_t sx = 1, sy = size_t(g.width), st = g.frame_size();

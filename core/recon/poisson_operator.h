@@ -41,7 +41,9 @@ class PoissonSystem {
 
   // q = A p; returns p·q (the CG step needs it, fusing saves a pass).
   double apply(const float* p, float* q) const;
-  // b = W_primal g + Σ Hᵀ W d, with targets indexed by term (primal = g).
+  // b = W_primal g + Σ Hᵀ W d, with targets indexed by term (primal = g). In
+  // mask mode the targets must be 0 where a constraint does not exist (as
+  // gather_term leaves them): the weights are then applied unconditionally.
   void rhs(const std::array<const Field*, kTermCount>& targets, Field* b) const;
   // diag(A), for the Jacobi preconditioner.
   void diagonal(Field* d) const;
@@ -52,6 +54,7 @@ class PoissonSystem {
  private:
   template <class Weights>
   double apply_impl(const float* p, float* q) const;
+  void rhs_masked(const std::array<const Field*, kTermCount>& targets, Field* b) const;
   // Weight of constraint t at pixel i in either mode (setup passes only).
   float weight_at(Term t, size_t i) const {
     const int k = term_index(t);
