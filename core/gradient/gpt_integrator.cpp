@@ -21,6 +21,14 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   GradientFilm film(w, h);
   std::atomic<uint64_t> rays{0}, invalid{0}, shifts{0}, failures{0};
   int spp_done = 0;
+
+  // ---- Emitters seen directly: their own stratified pass (first, so a time
+  // budget includes it); it replaces the base paths' `direct` ----
+  auto direct = render_frame_direct(scene, settings, control);
+  if (!direct.ok()) return direct.status();
+  Image direct_pass = std::move(direct->direct);
+  rays += direct->rays;
+  invalid += direct->invalid_samples;
   const bool timed = settings.time_budget_s > 0;
   while (true) {
     const int first = spp_done, count = settings.spp;
@@ -59,6 +67,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
 
   GptFrameResult result;
   result.buffers = film.resolve(spp_done);
+  if (!direct_pass.empty()) result.buffers.direct = std::move(direct_pass);
   result.spp = spp_done;
   result.rays = rays;
   result.invalid_samples = invalid;

@@ -126,6 +126,11 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
   r.path.max_depth = d.max_depth;
   r.path.rr_depth = d.rr_depth;
   r.path.hide_emitters = d.hide_emitters;
+  r.direct = default_direct_emission(/*gradient_domain=*/job.integrator != "pt");
+  if (job.direct_light.strata >= 0) r.direct.strata = job.direct_light.strata;
+  if (job.direct_light.edge_strata >= 0) r.direct.edge_strata = job.direct_light.edge_strata;
+  r.direct.edge_strata = std::max(r.direct.edge_strata, r.direct.strata);
+  GDVR_RETURN_IF_ERROR(r.direct.validate().with_context("job.direct_light: "));
   if (job.integrator == "gpt") {
     auto shift = parse_shift_mapping(job.shift);
     if (!shift.ok()) return shift.status().with_context("job.");

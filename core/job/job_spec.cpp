@@ -292,7 +292,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   const std::string p = "job";
   GDVR_RETURN_IF_ERROR(r.check_object(j, p, {"scene", "frames", "fps", "width", "height", "spp", "time_budget_s", "seed",
                                              "integrator", "shift", "reconstruction", "params", "animation", "tracks",
-                                             "outputs", "priority", "reference"}));
+                                             "outputs", "priority", "reference", "direct_light"}));
   JobSpec job;
   GDVR_RETURN_IF_ERROR(r.opt(j, "scene", p, &job.scene));
   GDVR_RETURN_IF_ERROR(r.opt(j, "frames", p, &job.frames));
@@ -335,6 +335,17 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
       return r.error(rp + ".method", "must be l1, l2, uniform, weighted or none, not '" + rs.method + "'");
     if (!(rs.alpha >= 0)) return r.error(rp + ".alpha", "must be >= 0");
     if (rs.window < 1 || rs.window > 1000) return r.error(rp + ".window", "must be in [1, 1000]");
+  }
+  if (j.contains("direct_light")) {
+    const json& dj = j["direct_light"];
+    std::string dp = p + ".direct_light";
+    GDVR_RETURN_IF_ERROR(r.check_object(dj, dp, {"strata", "edge_strata"}));
+    GDVR_RETURN_IF_ERROR(r.opt(dj, "strata", dp, &job.direct_light.strata));
+    GDVR_RETURN_IF_ERROR(r.opt(dj, "edge_strata", dp, &job.direct_light.edge_strata));
+    if (job.direct_light.strata < -1 || job.direct_light.strata > 64)
+      return r.error(dp + ".strata", "must be in [0, 64] (0: from the paths' own samples)");
+    if (job.direct_light.edge_strata < -1 || job.direct_light.edge_strata > 64)
+      return r.error(dp + ".edge_strata", "must be in [0, 64]");
   }
   if (j.contains("params")) {
     const json& pj = j["params"];
@@ -395,6 +406,9 @@ std::string job_to_json(const JobSpec& job) {
   j["reconstruction"] = {{"method", job.reconstruction.method},
                          {"alpha", job.reconstruction.alpha},
                          {"window", job.reconstruction.window}};
+  j["direct_light"] = json::object();
+  if (job.direct_light.strata >= 0) j["direct_light"]["strata"] = job.direct_light.strata;
+  if (job.direct_light.edge_strata >= 0) j["direct_light"]["edge_strata"] = job.direct_light.edge_strata;
   j["params"] = json::object();
   for (const auto& [k, v] : job.params) j["params"][k] = v;
   json tracks = json::array();

@@ -20,6 +20,13 @@ struct ReconstructionSpec {
   int window = 20;            // frames in the temporal sliding window
 };
 
+// Emitters seen directly (core/render/direct_emission.h); -1 = the
+// integrator's default (4/16 for gpt and tgpt, 0/0 for pt).
+struct DirectLightSpec {
+  int strata = -1;
+  int edge_strata = -1;
+};
+
 struct OutputSpec {
   std::vector<std::string> exr_layers;  // empty: all the integrator produces
   bool previews = true;                 // 8-bit PNG through OCIO
@@ -39,6 +46,7 @@ struct JobSpec {
   std::string integrator = "pt";       // pt | gpt | tgpt
   std::string shift = "reconnect";     // replay | reconnect | hybrid
   ReconstructionSpec reconstruction;
+  DirectLightSpec direct_light;
   std::map<std::string, std::string> params;  // Mitsuba <default> overrides
   Animation animation;                 // keyframed tracks
   OutputSpec outputs;

@@ -17,6 +17,14 @@ struct PixelSums {
 
 }  // namespace
 
+Expected<DirectEmissionResult> render_frame_direct(const FrameScene& scene, const FrameRenderSettings& settings,
+                                                   const FrameRenderControl& control) {
+  if (!settings.direct.enabled()) return DirectEmissionResult{};
+  PerspectiveCamera camera(scene.scene().camera, settings.width, settings.height);
+  return render_direct_emission(scene, camera, settings.width, settings.height, settings.direct, settings.seed,
+                                kDirectEmissionStream, settings.path, settings.threads, control.cancel);
+}
+
 Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const FrameRenderSettings& settings,
                                             uint32_t frame, const FrameRenderControl& control) {
   const int w = settings.width, h = settings.height;
@@ -29,6 +37,16 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
   std::vector<PixelSums> sums(size_t(w) * h);
   std::atomic<uint64_t> rays{0}, invalid{0};
   int spp_done = 0;
+
+  // ---- Emitters seen directly: their own stratified pass (first, so a time
+  // budget includes it); the paths then leave out emission at depth 0 ----
+  auto direct = render_frame_direct(scene, settings, control);
+  if (!direct.ok()) return direct.status();
+  Image direct_pass = std::move(direct->direct);
+  rays += direct->rays;
+  invalid += direct->invalid_samples;
+  PathTracerSettings path = settings.path;
+  if (!direct_pass.empty()) path.hide_emitters = true;
 
   // Passes: one pass of `spp` samples in spp mode; in time-budget mode passes
   // of `spp` samples each until the next pass would overrun the budget.
@@ -56,7 +74,7 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
             Sampler sampler(settings.seed, frame, uint32_t(x), uint32_t(y), uint32_t(s));
             Vec2f jitter = sampler.next_2d();  // box filter: uniform within the pixel
             Ray ray = camera.generate_ray({float(x) + jitter.x, float(y) + jitter.y});
-            PathSample ls = trace_path(scene, settings.path, ray, sampler, counters);
+            PathSample ls = trace_path(scene, path, ray, sampler, counters);
             for (int c = 0; c < 3; ++c) {
               ps.sum[c] += ls.radiance[c];
               ps.sum_sq[c] += double(ls.radiance[c]) * ls.radiance[c];
@@ -89,6 +107,11 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
         result.variance.at(x, y, c) = float(var);
       }
     }
+  if (!direct_pass.empty()) {
+    // The pass's own variance is not measured (it is far below the paths').
+    for (size_t k = 0; k < result.color.data().size(); ++k) result.color.data()[k] += direct_pass.data()[k];
+    result.direct = std::move(direct_pass);
+  }
   result.spp = spp_done;
   result.rays = rays;
   result.invalid_samples = invalid;

@@ -7,6 +7,7 @@
 
 #include "core/image/image.h"
 #include "core/render/frame_scene.h"
+#include "core/render/direct_emission.h"
 #include "core/render/path_tracer.h"
 
 namespace gdvr {
@@ -19,6 +20,9 @@ struct FrameRenderSettings {
   int threads = 0;
   int tile_size = 16;
   PathTracerSettings path;
+  // Emitters seen directly from the camera: their own stratified pass, or
+  // (strata 0) the paths' own camera samples. See direct_emission.h.
+  DirectEmissionSettings direct = default_direct_emission(/*gradient_domain=*/false);
 };
 
 struct FrameRenderResult {
@@ -35,6 +39,12 @@ struct FrameRenderControl {
   const std::atomic<bool>* cancel = nullptr;
   std::function<void(double fraction)> on_progress;
 };
+
+// The frame's direct-light pass (settings.direct, fixed jitter stream
+// kDirectEmissionStream); an empty image and no rays when it is disabled.
+// Every integrator runs it before its paths, so a time budget includes it.
+Expected<DirectEmissionResult> render_frame_direct(const FrameScene& scene, const FrameRenderSettings& settings,
+                                                   const FrameRenderControl& control);
 
 Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const FrameRenderSettings& settings,
                                             uint32_t frame, const FrameRenderControl& control);

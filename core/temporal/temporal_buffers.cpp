@@ -34,7 +34,7 @@ LayeredImage tgpt_frame_layers(TgptFrameRender&& r) {
   // The frame's own estimates (primal, dx, dy = (A + B)/2) are not stored:
   // tgpt_frame_estimate() forms them from the passes, which saves 7 of ~20
   // RGB layers per buffered frame (stage 2 holds about W frames).
-  L.add("direct", kRgb, average(a.direct, b.direct, 0.5f));
+  L.add("direct", kRgb, r.direct.empty() ? average(a.direct, b.direct, 0.5f) : std::move(r.direct));
   L.add("shift_failure_rate", {"Y"}, average(a.shift_failure_rate, b.shift_failure_rate, 0.5f));
   // ---- The passes, for the temporal differences of stage 2 ----
   for (auto [prefix, p] : {std::pair<const char*, GradientFilmBuffers*>{"a_", &a}, {"b_", &b}}) {

@@ -1,6 +1,8 @@
 #include "core/temporal/tgpt_frame.h"
 
+#include <algorithm>
 #include <chrono>
+
 
 namespace gdvr {
 
@@ -14,9 +16,23 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
     return failed_precondition("render_tgpt_frame: pass A can only be reused across a static frame pair");
   const auto start = std::chrono::steady_clock::now();
   TgptFrameRender out;
+  // ---- Direct light: one stratified pass for the frame, the same jitter in
+  // every frame (first, so that a time budget includes it) ----
+  {
+    auto direct = render_frame_direct(scene, render, control);
+    if (!direct.ok()) return direct.status().with_context("direct light: ");
+    out.direct = std::move(direct->direct);
+    out.rays += direct->rays;
+    out.invalid_samples += direct->invalid_samples;
+  }
+  const double direct_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // The passes take the direct light from their own camera samples (free
+  // there); the pass above replaces it.
   FrameRenderSettings half = render;
+  half.direct = DirectEmissionSettings{0, 0};
   half.spp = tgpt_pass_spp(render.spp);
-  if (half.time_budget_s > 0) half.time_budget_s *= 0.5;
+  if (half.time_budget_s > 0) half.time_budget_s = std::max(1e-3, 0.5 * (render.time_budget_s - direct_seconds));
 
   // ---- Pass A (stream s(t)): the replayed offset of the previous frame's pass B ----
   FrameRenderControl control_a = control, control_b = control;

@@ -30,6 +30,9 @@ struct TgptNeighbourhood {
 
 struct TgptFrameRender {
   GradientFilmBuffers a, b;  // the two half passes
+  // Emitters seen directly, from one stratified pass for the frame
+  // (gpt.direct_strata > 0); empty: the passes' own `direct` is averaged.
+  Image direct;
   MotionField forward;       // towards the next frame; empty when the pair is static or at the shot's end
   MotionField backward;      // towards the previous frame; likewise
   int spp = 0;               // both passes together

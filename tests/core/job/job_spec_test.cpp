@@ -57,7 +57,7 @@ TEST(JobSpecTest, ParsesEveryField) {
       {"frame": 60, "matrix": [1,0,0,5, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]}],
     "outputs": {"exr_layers": ["primal", "dx"], "previews": false, "video_codec": "ffv1",
                 "ocio_display": "d", "ocio_view": "v"},
-    "priority": 3, "reference": "ref_%04d.exr"})",
+    "priority": 3, "reference": "ref_%04d.exr", "direct_light": {"strata": 2, "edge_strata": 8}})",
                             "job.json");
   ASSERT_TRUE(job.ok()) << job.status().to_string();
   EXPECT_EQ(job->scene, "cbox/cbox-rgb.xml");
@@ -78,6 +78,16 @@ TEST(JobSpecTest, ParsesEveryField) {
   EXPECT_FALSE(job->outputs.previews);
   EXPECT_EQ(job->outputs.exr_layers.size(), 2u);
   EXPECT_EQ(job->priority, 3);
+  EXPECT_EQ(job->direct_light.strata, 2);
+  EXPECT_EQ(job->direct_light.edge_strata, 8);
+  // Unset means the integrator's default, and survives a round trip as unset.
+  auto plain = parse_job_json(R"({"scene": "a.xml"})", "j");
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->direct_light.strata, -1);
+  auto again = parse_job_json(job_to_json(*plain), "again");
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(again->direct_light.strata, -1);
+  EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->direct_light.edge_strata, 8);
 }
 
 TEST(JobSpecTest, RoundTrip) {
@@ -104,6 +114,7 @@ TEST(JobSpecTest, UnknownFieldsNameTheirPath) {
       {R"({"scene": "a.xml", "sceen": 1})", "job.sceen: unknown field"},
       {R"({"scene": "a.xml", "reconstruction": {"alpah": 1}})", "job.reconstruction.alpah: unknown field"},
       {R"({"scene": "a.xml", "outputs": {"png": true}})", "job.outputs.png: unknown field"},
+      {R"({"scene": "a.xml", "direct_light": {"stratum": 4}})", "job.direct_light.stratum: unknown field"},
       {R"({"scene": "a.xml", "tracks": [{"target": "sensor", "keys": [{"time": 0, "matrx": []}]}]})",
        "job.tracks[0].keys[0].matrx: unknown field"},
   };
@@ -125,6 +136,8 @@ TEST(JobSpecTest, TypeAndValueErrorsNameTheField) {
       {R"({"scene": "a.xml", "seed": "-1"})", "job.seed"},
       {R"({"scene": "a.xml", "frames": "5-1"})", "job.frames"},
       {R"({"scene": "a.xml", "integrator": "bdpt"})", "job.integrator"},
+      {R"({"scene": "a.xml", "direct_light": {"strata": 65}})", "job.direct_light.strata"},
+      {R"({"scene": "a.xml", "direct_light": {"edge_strata": -2}})", "job.direct_light.edge_strata"},
       {R"({"scene": "a.xml", "tracks": [{"target": "s", "interpolation": "spline", "keys": [{"time": 0, "translate": [0,0,0]}]}]})",
        "job.tracks[0].interpolation"},
       {R"({"scene": "a.xml", "tracks": [{"target": "s", "keys": [{"time": 1, "translate": [0,0,0]}, {"time": 0, "translate": [0,0,0]}]}]})",

@@ -5,6 +5,8 @@
 // by construction (ShiftReplayTest checks that on cbox).
 #include <gtest/gtest.h>
 
+#include <ostream>
+
 #include "core/gradient/base_path.h"
 #include "core/gradient/reconnection_shift.h"
 #include "core/render/perspective_camera.h"
@@ -17,6 +19,8 @@ struct MisParam {
   StiffCase c;
   ShiftMapping shift;
 };
+// Readable names in ctest output instead of the parameter's bytes.
+void PrintTo(const MisParam& p, std::ostream* os) { *os << p.c.name << "/" << shift_mapping_name(p.shift); }
 
 class StiffMisTest : public ::testing::TestWithParam<MisParam> {};
 
@@ -71,7 +75,9 @@ TEST_P(StiffMisTest, WeightsInUnitIntervalAndGradientsFinite) {
               c.name, shift_mapping_name(GetParam().shift), (long long)shifts, (long long)failures,
               (long long)techniques, (long long)inf_ratios, max_ratio, (unsigned long long)counters.invalid_samples);
   EXPECT_GT(shifts, 0);
-  if (!c.black) EXPECT_GT(techniques, 0);
+  if (!c.black) {
+    EXPECT_GT(techniques, 0);
+  }
 }
 
 std::vector<MisParam> mis_params() {

@@ -3,6 +3,8 @@
 // degenerate / non-finite data, a frame where every cached-path shift fails.
 #include <gtest/gtest.h>
 
+#include <ostream>
+
 #include "core/render/perspective_camera.h"
 #include "tests/core/stiff/stiff_test_util.h"
 
@@ -87,6 +89,8 @@ struct ScaleParam {
   const char* far;
   Integ integ;
 };
+// Readable names in ctest output instead of the parameter's bytes.
+void PrintTo(const ScaleParam& p, std::ostream* os) { *os << p.scale << "/" << integ_name(p.integ); }
 
 class StiffScaleTest : public ::testing::TestWithParam<ScaleParam> {};
 

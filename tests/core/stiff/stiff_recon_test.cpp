@@ -3,6 +3,8 @@
 // and Inf (injected into stage-1 buffers and into GradientFrames directly).
 #include <gtest/gtest.h>
 
+#include <ostream>
+
 #include <limits>
 #include <random>
 
@@ -27,6 +29,8 @@ struct AlphaParam {
   const char* method;
   double alpha;
 };
+// Readable names in ctest output instead of the parameter's bytes.
+void PrintTo(const AlphaParam& p, std::ostream* os) { *os << p.method << "/alpha=" << p.alpha; }
 class StiffAlphaTest : public ::testing::TestWithParam<AlphaParam> {};
 
 TEST_P(StiffAlphaTest, FiniteAndPinnedToPrimalOrMean) {

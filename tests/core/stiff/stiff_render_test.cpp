@@ -4,6 +4,8 @@
 // one: 4x was not enough to leave the heavy-tailed regime of caustic scenes).
 #include <gtest/gtest.h>
 
+#include <ostream>
+
 #include "tests/core/stiff/stiff_test_util.h"
 
 namespace gdvr::stiff {
@@ -13,6 +15,8 @@ struct RenderParam {
   StiffCase c;
   Integ integ;
 };
+// Readable names in ctest output instead of the parameter's bytes.
+void PrintTo(const RenderParam& p, std::ostream* os) { *os << p.c.name << "/" << integ_name(p.integ); }
 
 class StiffRenderTest : public ::testing::TestWithParam<RenderParam> {};
 

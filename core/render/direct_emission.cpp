@@ -1,0 +1,132 @@
+#include "core/render/direct_emission.h"
+
+#include <algorithm>
+#include <vector>
+
+#include "core/math/rng.h"
+#include "core/render/tile_scheduler.h"
+
+namespace gdvr {
+namespace {
+
+// Keeps the direct pass's random numbers apart from the path samples of the
+// same (seed, stream, pixel): those use sample indices 0, 1, 2, ...
+constexpr uint32_t kDirectSampleBase = 0x80000000u;
+
+// The probes that find edges: a grid at half-pixel spacing, (2W+1)×(2H+1)
+// points, ~4 rays per pixel; pixel (x, y) owns the 3×3 probes from (2x, 2y).
+class ProbeGrid {
+ public:
+  ProbeGrid(int width, int height) : nx_(2 * width + 1), ny_(2 * height + 1), luminance_(size_t(nx_) * ny_) {}
+  int nx() const { return nx_; }
+  int ny() const { return ny_; }
+  float& at(int i, int j) { return luminance_[size_t(j) * nx_ + i]; }
+  float at(int i, int j) const { return luminance_[size_t(j) * nx_ + i]; }
+
+  // An edge crosses the pixel when its probes disagree by more than half of
+  // their mean (+ a small floor): an emitter's silhouette (0 against L) always
+  // does, the smooth texture of an environment map usually does not.
+  bool is_edge(int x, int y) const {
+    float lo = at(2 * x, 2 * y), hi = lo, sum = 0;
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        const float v = at(2 * x + i, 2 * y + j);
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+        sum += v;
+      }
+    return hi - lo > 0.5f * (sum / 9.0f) + 1e-4f;
+  }
+
+ private:
+  int nx_, ny_;
+  std::vector<float> luminance_;
+};
+
+}  // namespace
+
+Status DirectEmissionSettings::validate() const {
+  if (strata < 0 || edge_strata > 64 || (strata > 0 && edge_strata < strata))
+    return invalid_argument("direct light: need 0 <= strata <= edge_strata <= 64 (got strata " + std::to_string(strata) +
+                            ", edge_strata " + std::to_string(edge_strata) + ")");
+  return Status::Ok();
+}
+
+Rgb first_hit_emission(const FrameScene& scene, const Ray& camera_ray) {
+  SurfaceInteraction si;
+  if (!scene.intersect(camera_ray, &si)) return scene.eval_environment(camera_ray.d);
+  if (scene.emitter_of_shape(si.shape) >= 0) return scene.eval_area_emitter(si);
+  return Rgb(0.0f);
+}
+
+Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, const PerspectiveCamera& camera,
+                                                      int width, int height, const DirectEmissionSettings& settings,
+                                                      uint64_t seed, uint32_t stream,
+                                                      const PathTracerSettings& path, int threads,
+                                                      const std::atomic<bool>* cancel) {
+  if (width <= 0 || height <= 0) return invalid_argument("direct emission: resolution must be positive");
+  GDVR_RETURN_IF_ERROR(settings.validate());
+  if (!settings.enabled()) return invalid_argument("direct emission: strata must be at least 1");
+  DirectEmissionResult out;
+  out.direct = Image(width, height, 3);
+  if (path.hide_emitters) return out;
+  std::atomic<uint64_t> rays{0}, invalid{0}, edges{0};
+  TileRunOptions opts;
+  opts.threads = threads;
+  opts.cancel = cancel;
+
+  // ---- Probes (deterministic positions: the choice of the stratum count
+  // depends on no random number of the estimate, so it stays unbiased) ----
+  const bool adaptive = settings.edge_strata > settings.strata;
+  ProbeGrid probes(adaptive ? width : 0, adaptive ? height : 0);
+  if (adaptive) {
+    Status st = run_tiles(probes.nx(), probes.ny(), opts, [&](const Tile& tile) {
+      for (int j = tile.y0; j < tile.y1; ++j)
+        for (int i = tile.x0; i < tile.x1; ++i) {
+          const Rgb e = first_hit_emission(scene, camera.generate_ray({0.5f * float(i), 0.5f * float(j)}));
+          probes.at(i, j) = is_finite(e) ? luminance(e) : 0.0f;
+        }
+      rays += uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0);
+    });
+    if (!st.ok()) return st;
+  }
+
+  // ---- Stratified estimate per pixel ----
+  Status st = run_tiles(width, height, opts, [&](const Tile& tile) {
+    uint64_t tile_rays = 0, tile_invalid = 0, tile_edges = 0;
+    for (int y = tile.y0; y < tile.y1; ++y)
+      for (int x = tile.x0; x < tile.x1; ++x) {
+        const bool edge = adaptive && probes.is_edge(x, y);
+        const int k = edge ? settings.edge_strata : settings.strata;
+        tile_edges += edge ? 1 : 0;
+        const float inv_k = 1.0f / float(k);
+        // One stream per pixel; the k² jitters are its first 2k² numbers.
+        Sampler sampler(seed, stream, uint32_t(x), uint32_t(y), kDirectSampleBase);
+        double sum[3] = {0, 0, 0};
+        for (int j = 0; j < k; ++j)
+          for (int i = 0; i < k; ++i) {
+            const Vec2f u = sampler.next_2d();
+            const Ray ray = camera.generate_ray({float(x) + (float(i) + u.x) * inv_k, float(y) + (float(j) + u.y) * inv_k});
+            const Rgb e = first_hit_emission(scene, ray);
+            ++tile_rays;
+            if (!is_finite(e)) {
+              ++tile_invalid;
+              continue;
+            }
+            for (int c = 0; c < 3; ++c) sum[c] += double(e[c]);
+          }
+        const double inv_n = 1.0 / double(k * k);
+        for (int c = 0; c < 3; ++c) out.direct.at(x, y, c) = float(sum[c] * inv_n);
+      }
+    rays += tile_rays;
+    invalid += tile_invalid;
+    edges += tile_edges;
+  });
+  if (!st.ok()) return st;
+  out.rays = rays;
+  out.invalid_samples = invalid;
+  out.edge_pixels = edges;
+  return out;
+}
+
+}  // namespace gdvr
