@@ -92,13 +92,14 @@ stop_server
 echo "demo: gdvr-server stopped (SIGTERM)"
 
 # ---- Error-vs-time report (gdvr-report; docs/report.md) ----
-# BEGIN gdvr-report step. PT, G-PT (L1, L2, weighted) and T-GPT (L1, L2) on
-# the first 6 frames of the same job at 64x64, at 0.1 and 0.3 s per frame,
-# against a 256-spp PT reference cached in $OUT/report/reference/ (reused on
-# the next run): about a minute on 2 cores. GDVR_DEMO_REPORT=0 skips it.
+# BEGIN gdvr-report step. PT (plain and with the stratified direct-light
+# pass), G-PT (L1, L2, weighted) and T-GPT (L1, L2) on the first 24 frames of
+# the same job at 64x64, at 0.1 and 0.3 s per frame, against a 512-spp PT
+# reference cached in $OUT/report/reference/ (reused on the next run): about
+# two minutes on 2 cores. GDVR_DEMO_REPORT=0 skips it.
 REPORT=""
 if [ "${GDVR_DEMO_REPORT:-1}" != 0 ]; then
-  REPORT_ARGS=(--out "$OUT/report" --frames 0-5 --width 64 --height 64 --budgets 0.1,0.3 --reference-spp 256)
+  REPORT_ARGS=(--out "$OUT/report" --frames 0-23 --width 64 --height 64 --budgets 0.1,0.3 --reference-spp 512)
   [ -n "${GDVR_DEMO_THREADS:-}" ] && REPORT_ARGS+=(--threads "$GDVR_DEMO_THREADS")
   if "$BUILD_DIR/core/gdvr-report" "$JOB" "${REPORT_ARGS[@]}"; then
     REPORT=$(cd "$OUT/report" && pwd)/report.html

@@ -28,7 +28,7 @@ struct ErrorTimeReportOptions {
   std::string reference;
   int reference_spp = 1024;
   std::vector<double> budgets = {0.5, 1, 2, 4};  // seconds per frame
-  // Methods to run, from pt, gpt-l1, gpt-l2, gpt-weighted, tgpt-l1, tgpt-l2;
+  // Methods to run, from pt, pt-sd, gpt-l1, gpt-l2, gpt-weighted, tgpt-l1, tgpt-l2;
   // empty: all that apply (tgpt only for animations of 2+ frames).
   std::vector<std::string> methods;
   std::string ocio_config;  // display transform of the images; empty: a plain sRGB encoding

@@ -197,11 +197,14 @@ int quality(const Args& a) {
   // ---- Calibrate: seconds per spp (render) and the fixed reconstruction cost per method ----
   // tgpt-w1: the same two half passes, each frame reconstructed alone (W = 1):
   // frame-by-frame G-PT with T-GPT's sampler, so tgpt vs tgpt-w1 isolates the
-  // temporal terms; gpt: the G-PT integrator with its own defaults.
-  const std::vector<std::string> methods = {"tgpt", "tgpt-w1", "gpt", "pt"};
+  // temporal terms; gpt: the G-PT integrator with its own defaults; pt-sd:
+  // PT with the same stratified direct-light pass the gradient methods use,
+  // the stronger baseline (pt alone is Mitsuba's estimator).
+  const std::vector<std::string> methods = {"tgpt", "tgpt-w1", "gpt", "pt", "pt-sd"};
   auto configure = [&](JobSpec* job, const std::string& m) {
-    job->integrator = m == "tgpt-w1" ? "tgpt" : m;
+    job->integrator = m == "tgpt-w1" ? "tgpt" : m == "pt-sd" ? "pt" : m;
     job->reconstruction.window = m == "tgpt-w1" ? 1 : a.window;
+    if (m == "pt-sd") job->direct_light = {4, 16};
   };
   std::map<std::string, double> per_spp, fixed;
   for (const std::string& m : methods) {
