@@ -15,6 +15,9 @@ constexpr uint32_t kDirectSampleBase = 0x80000000u;
 
 // The probes that find edges: a grid at half-pixel spacing, (2W+1)×(2H+1)
 // points, ~4 rays per pixel; pixel (x, y) owns the 3×3 probes from (2x, 2y).
+// They only choose how many strata a pixel gets; an emitter smaller than the
+// probe spacing can slip between them, and its pixel is then sampled with
+// fewer strata (still unbiased).
 class ProbeGrid {
  public:
   ProbeGrid(int width, int height) : nx_(2 * width + 1), ny_(2 * height + 1), luminance_(size_t(nx_) * ny_) {}
@@ -23,10 +26,14 @@ class ProbeGrid {
   float& at(int i, int j) { return luminance_[size_t(j) * nx_ + i]; }
   float at(int i, int j) const { return luminance_[size_t(j) * nx_ + i]; }
 
-  // An edge crosses the pixel when its probes disagree by more than half of
-  // their mean (+ a small floor): an emitter's silhouette (0 against L) always
-  // does, the smooth texture of an environment map usually does not.
-  bool is_edge(int x, int y) const {
+  // How much the emission seen through the pixel varies, from its 3×3 probes:
+  // kUniform where all nine agree exactly (no emitter, or inside one of
+  // constant radiance: one sample is as good as k²), kEdge where they disagree
+  // by more than half of their mean (+ a small floor: an emitter's silhouette,
+  // 0 against L, always does), kSmooth otherwise (e.g. the texture of an
+  // environment map).
+  enum class Variation { kUniform, kSmooth, kEdge };
+  Variation variation(int x, int y) const {
     float lo = at(2 * x, 2 * y), hi = lo, sum = 0;
     for (int j = 0; j < 3; ++j)
       for (int i = 0; i < 3; ++i) {
@@ -35,7 +42,8 @@ class ProbeGrid {
         hi = std::max(hi, v);
         sum += v;
       }
-    return hi - lo > 0.5f * (sum / 9.0f) + 1e-4f;
+    if (hi == lo) return Variation::kUniform;
+    return hi - lo > 0.5f * (sum / 9.0f) + 1e-4f ? Variation::kEdge : Variation::kSmooth;
   }
 
  private:
@@ -96,9 +104,11 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
     uint64_t tile_rays = 0, tile_invalid = 0, tile_edges = 0;
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) {
-        const bool edge = adaptive && probes.is_edge(x, y);
-        const int k = edge ? settings.edge_strata : settings.strata;
-        tile_edges += edge ? 1 : 0;
+        const ProbeGrid::Variation var = adaptive ? probes.variation(x, y) : ProbeGrid::Variation::kSmooth;
+        const int k = var == ProbeGrid::Variation::kEdge      ? settings.edge_strata
+                      : var == ProbeGrid::Variation::kUniform ? 1
+                                                              : settings.strata;
+        tile_edges += var == ProbeGrid::Variation::kEdge ? 1 : 0;
         const float inv_k = 1.0f / float(k);
         // One stream per pixel; the k² jitters are its first 2k² numbers.
         Sampler sampler(seed, stream, uint32_t(x), uint32_t(y), kDirectSampleBase);

@@ -33,11 +33,13 @@
 namespace gdvr {
 
 struct DirectEmissionSettings {
-  // k: k×k samples in every pixel; 0 = no separate pass (the integrator takes
-  // the direct light from its paths' own camera samples).
+  // k: k×k samples per pixel; 0 = no separate pass (the integrator takes the
+  // direct light from its paths' own camera samples).
   int strata = 4;
   // k in pixels an emitter edge crosses, found by deterministic probes on a
   // half-pixel grid (~4 rays per pixel; only when edge_strata > strata).
+  // With probes, pixels whose probes all see the same emission take a single
+  // sample, and `strata` applies where the emission varies smoothly.
   int edge_strata = 16;
 
   bool enabled() const { return strata > 0; }

@@ -142,6 +142,13 @@ Image reconstruct_final(const GptFrameResult& r, ReconMethod method, double* sec
   return img;
 }
 
+// G-PT as a job runs it: with the stratified direct-light pass (PT keeps its
+// own samples, as a pt job does).
+FrameRenderSettings with_direct_pass(FrameRenderSettings rs) {
+  rs.direct = default_direct_emission(/*gradient_domain=*/true);
+  return rs;
+}
+
 void run_cost(const Args& a, const BenchScene& bs, Loaded& l) {
   struct Config {
     ShiftMapping shift;
@@ -162,7 +169,7 @@ void run_cost(const Args& a, const BenchScene& bs, Loaded& l) {
     for (size_t c = 0; c < configs.size(); ++c) {
       GptSettings g = GptSettings::defaults_for(configs[c].shift);
       g.cached_rr = configs[c].rr;
-      auto r = render_frame_gpt(*l.scene, rs, g, 0, {});
+      auto r = render_frame_gpt(*l.scene, with_direct_pass(rs), g, 0, {});
       if (!r.ok()) std::exit(1);
       ratios[c].push_back(r->seconds / pt->seconds);
       fail_rates[c] = r->shift_failure_rate;
@@ -188,7 +195,7 @@ void run_quality(const Args& a, const BenchScene& bs, Loaded& l) {
     for (bool rr : {true, false}) {
       GptSettings g = GptSettings::defaults_for(a.quality_shift);
       g.cached_rr = rr;
-      auto r = render_frame_gpt(*l.scene, rs, g, 0, {});
+      auto r = render_frame_gpt(*l.scene, with_direct_pass(rs), g, 0, {});
       if (!r.ok()) std::exit(1);
       std::printf("quality %s budget %.1f s: PT %d spp relMSE %.5f (global %.5f) | G-PT %s cached_rr=%s %d spp in "
                   "%.2f s, failure %.3f\n",
