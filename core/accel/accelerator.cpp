@@ -39,6 +39,10 @@ void on_embree_error(void* user, RTCError code, const char* message) {
     sink->first_error = std::string("Embree error (") + embree_error_name(code) + "): " + (message ? message : "");
 }
 
+// Ray masks: static geometry answers to bit 0, instanced (animated) geometry
+// to bit 1, so a query can skip what cannot have moved.
+constexpr unsigned kStaticMask = 1u, kInstancedMask = 2u;
+
 // Embree's FLOAT3X4_COLUMN_MAJOR layout.
 void to_embree_matrix(const Transform& t, float out[12]) {
   const Matrix4& m = t.matrix();
@@ -74,6 +78,8 @@ struct Accelerator::Impl {
   Status attach(int id, RTCGeometry geom, bool instanced, const Transform& to_world) {
     rtcCommitGeometry(geom);
     if (!instanced) {
+      rtcSetGeometryMask(geom, kStaticMask);
+      rtcCommitGeometry(geom);
       rtcAttachGeometryByID(top, geom, unsigned(id));
       rtcReleaseGeometry(geom);
       return take_error("attaching geometry " + std::to_string(id));
@@ -88,6 +94,7 @@ struct Accelerator::Impl {
     float xfm[12];
     to_embree_matrix(to_world, xfm);
     rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+    rtcSetGeometryMask(inst, kInstancedMask);
     rtcCommitGeometry(inst);
     rtcAttachGeometryByID(top, inst, unsigned(id));
     instances[id] = inst;
@@ -195,7 +202,7 @@ bool Accelerator::intersect(Vec3f o, Vec3f d, float tmin, float tmax, RayHit* hi
   return true;
 }
 
-bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax) const {
+bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax, bool instanced_only) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay ray;
@@ -208,7 +215,7 @@ bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax) const {
   ray.tnear = tmin;
   ray.tfar = tmax;
   ray.time = 0;
-  ray.mask = 0xFFFFFFFFu;
+  ray.mask = instanced_only ? kInstancedMask : 0xFFFFFFFFu;
   ray.id = 0;
   ray.flags = 0;
   rtcOccluded1(impl_->top, &context, &ray);

@@ -42,8 +42,9 @@ class Accelerator {
 
   // Closest hit with t in (tmin, tmax). Thread-safe after commit().
   bool intersect(Vec3f origin, Vec3f dir, float tmin, float tmax, RayHit* hit) const;
-  // Any hit with t in (tmin, tmax).
-  bool occluded(Vec3f origin, Vec3f dir, float tmin, float tmax) const;
+  // Any hit with t in (tmin, tmax); `instanced_only`: test only the geometry
+  // added with instanced = true (Embree ray masks).
+  bool occluded(Vec3f origin, Vec3f dir, float tmin, float tmax, bool instanced_only = false) const;
 
  private:
   struct Impl;

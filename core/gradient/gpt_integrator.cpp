@@ -9,7 +9,8 @@
 namespace gdvr {
 
 Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRenderSettings& settings,
-                                          const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control) {
+                                          const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control,
+                                          const TemporalShiftTarget* temporal) {
   const int w = settings.width, h = settings.height;
   if (w <= 0 || h <= 0) return invalid_argument("render resolution must be positive");
   if (settings.spp <= 0) return invalid_argument("spp must be positive");
@@ -18,8 +19,8 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
 
   PerspectiveCamera camera(scene.scene().camera, w, h);
-  GradientFilm film(w, h);
-  std::atomic<uint64_t> rays{0}, invalid{0}, shifts{0}, failures{0};
+  GradientFilm film(w, h, temporal != nullptr);
+  std::atomic<uint64_t> rays{0}, invalid{0}, shifts{0}, failures{0}, temporal_rays{0};
   int spp_done = 0;
 
   // ---- Emitters seen directly: their own stratified pass (first, so a time
@@ -44,6 +45,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
     }
     Status st = run_tiles(w, h, opts, [&](const Tile& tile) {
       GradientTracer tracer(scene, camera, w, h, settings.path, gpt, settings.seed, frame);
+      tracer.set_temporal_target(temporal);
       GradientSample gs;
       uint64_t tile_shifts = 0, tile_failures = 0;
       for (int y = tile.y0; y < tile.y1; ++y)
@@ -55,6 +57,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
             tile_failures += uint64_t(gs.failures);
           }
       rays += tracer.counters().rays;
+      temporal_rays += tracer.temporal_rays();
       invalid += tracer.counters().invalid_samples;
       shifts += tile_shifts;
       failures += tile_failures;
@@ -70,6 +73,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   if (!direct_pass.empty()) result.buffers.direct = std::move(direct_pass);
   result.spp = spp_done;
   result.rays = rays;
+  result.temporal_rays = temporal_rays;
   result.invalid_samples = invalid;
   result.shift_failure_rate = shifts > 0 ? double(failures) / double(shifts) : 0.0;
   result.seconds = elapsed();

@@ -6,6 +6,7 @@
 
 #include "core/gradient/gpt_settings.h"
 #include "core/gradient/gradient_film.h"
+#include "core/gradient/temporal_reconnection_shift.h"
 #include "core/render/pt_integrator.h"
 
 namespace gdvr {
@@ -16,10 +17,14 @@ struct GptFrameResult {
   uint64_t rays = 0;
   uint64_t invalid_samples = 0;  // non-finite base paths or gradients dropped
   double shift_failure_rate = 0; // over all attempted offsets
+  uint64_t temporal_rays = 0;    // rays of the temporal shifts (part of `rays`)
   double seconds = 0;
 };
 
+// `temporal`, when given, also shifts every base path into that frame
+// (T-GPT's path-space temporal shift): buffers.temporal etc. are then filled.
 Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRenderSettings& settings,
-                                          const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control);
+                                          const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control,
+                                          const TemporalShiftTarget* temporal = nullptr);
 
 }  // namespace gdvr

@@ -18,6 +18,13 @@ void GradientFilm::add(int x, int y, uint32_t sample_index, const GradientSample
   }
   p.shifts += uint32_t(s.shifts);
   p.failures += uint32_t(s.failures);
+  if (temporal_) {
+    for (int c = 0; c < 3; ++c) {
+      p.temporal[c] += s.temporal[c];
+      if (half_a) p.temporal_a[c] += s.temporal[c];
+    }
+    p.temporal_failures += s.temporal_failed ? 1u : 0u;
+  }
 }
 
 GradientFilmBuffers GradientFilm::resolve(int spp) const {
@@ -31,6 +38,11 @@ GradientFilmBuffers GradientFilm::resolve(int spp) const {
   b.dx_var = Image(w, h, 3);
   b.dy_var = Image(w, h, 3);
   b.shift_failure_rate = Image(w, h, 1);
+  if (temporal_) {
+    b.temporal = Image(w, h, 3);
+    b.temporal_var = Image(w, h, 3);
+    b.temporal_failure_rate = Image(w, h, 1);
+  }
   const double n = std::max(1, spp);
   const double n_a = (spp + 1) / 2, n_b = spp / 2;
   // Var of the mean from two independent half means A, B (n_a, n_b samples):
@@ -64,6 +76,13 @@ GradientFilmBuffers GradientFilm::resolve(int spp) const {
         }
       }
       b.shift_failure_rate.at(x, y, 0) = p.shifts > 0 ? float(double(p.failures) / p.shifts) : 0.0f;
+      if (temporal_) {
+        for (int c = 0; c < 3; ++c) {
+          b.temporal.at(x, y, c) = float(p.temporal[c] / n);
+          b.temporal_var.at(x, y, c) = float(variance(p.temporal[c], p.temporal_a[c]));
+        }
+        b.temporal_failure_rate.at(x, y, 0) = float(double(p.temporal_failures) / n);
+      }
     }
   return b;
 }

@@ -30,18 +30,26 @@ struct GradientSample {
   Rgb direct;                               // emitters seen directly from the camera
   std::array<Rgb, kOffsetCount> gradient;   // towards I(neighbour) - I(p) for right/down, I(p) - I(neighbour) for left/up
   int shifts = 0, failures = 0;             // offsets attempted and failed
+  // The temporal path-space shift into another frame t' (when enabled): this
+  // generation's estimate of I_t'(p) - I_t(p), and whether the shift failed.
+  Rgb temporal;
+  bool temporal_failed = false;
 };
 
 struct GradientFilmBuffers {
   Image primal, dx, dy, direct;             // means, RGB
   Image primal_var, dx_var, dy_var;         // variance of the means, RGB, from the half buffers
   Image shift_failure_rate;                 // one channel: failed / attempted offsets
+  // Only with a temporal target (GradientFilm(w, h, true)): the mean of
+  // GradientSample::temporal, its variance, and the failed fraction.
+  Image temporal, temporal_var, temporal_failure_rate;
 };
 
 class GradientFilm {
  public:
   GradientFilm() = default;
-  GradientFilm(int width, int height) : width_(width), height_(height), pixels_(size_t(width) * height) {}
+  GradientFilm(int width, int height, bool temporal = false)
+      : width_(width), height_(height), temporal_(temporal), pixels_(size_t(width) * height) {}
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -59,8 +67,11 @@ class GradientFilm {
     double primal_a[3] = {0, 0, 0};
     double grad_a[kOffsetCount][3] = {};
     uint32_t shifts = 0, failures = 0;
+    double temporal[3] = {0, 0, 0}, temporal_a[3] = {0, 0, 0};
+    uint32_t temporal_failures = 0;
   };
   int width_ = 0, height_ = 0;
+  bool temporal_ = false;
   std::vector<Sums> pixels_;
 };
 

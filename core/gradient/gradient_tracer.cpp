@@ -27,6 +27,21 @@ void GradientTracer::sample(int x, int y, uint32_t s, GradientSample* out) {
   out->primal = base_.indirect;
   out->direct = base_.direct;
 
+  // ---- The temporal offset (every base path: no cached-path roulette) ----
+  if (temporal_) {
+    const uint64_t rays_before = counters_.rays;
+    const ShiftResult t =
+        temporal_reconnection_shift(scene_, settings_, base_, {float(x) + jitter.x, float(y) + jitter.y}, *temporal_,
+                                    counters_);
+    temporal_rays_ += counters_.rays - rays_before;
+    out->temporal = t.gradient;
+    out->temporal_failed = t.failed;
+    if (!is_finite(out->temporal)) {
+      ++counters_.invalid_samples;
+      out->temporal = Rgb(0.0f);
+    }
+  }
+
   // ---- Cached-path Russian roulette (§3.3): shift with probability q, divide by q ----
   float inv_q = 1.0f;
   if (settings_.cached_rr) {

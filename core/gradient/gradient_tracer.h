@@ -7,6 +7,7 @@
 #include "core/gradient/gpt_settings.h"
 #include "core/gradient/gradient_film.h"
 #include "core/gradient/path_record.h"
+#include "core/gradient/temporal_reconnection_shift.h"
 #include "core/render/path_tracer.h"
 #include "core/render/perspective_camera.h"
 
@@ -23,6 +24,10 @@ class GradientTracer {
   void sample(int x, int y, uint32_t s, GradientSample* out);
 
   const PathCounters& counters() const { return counters_; }
+  // Also shift every base path into another frame (T-GPT's path-space
+  // temporal shift); null: spatial offsets only.
+  void set_temporal_target(const TemporalShiftTarget* target) { temporal_ = target; }
+  uint64_t temporal_rays() const { return temporal_rays_; }  // part of counters().rays
 
  private:
   const FrameScene& scene_;
@@ -34,6 +39,8 @@ class GradientTracer {
   const uint32_t frame_;
   PathCounters counters_;
   PathRecord base_;
+  const TemporalShiftTarget* temporal_ = nullptr;
+  uint64_t temporal_rays_ = 0;
 };
 
 }  // namespace gdvr

@@ -1,6 +1,6 @@
 #include "core/gradient/reconnection_shift.h"
 
-#include "core/gradient/half_vector_copy.h"
+#include "core/gradient/follow_base.h"
 #include "core/math/sampling.h"
 
 namespace gdvr {
@@ -8,29 +8,12 @@ namespace {
 
 enum class OffsetState { kNotReconnected, kJustReconnected, kReconnected };
 
-// Samples exactly the Dirac lobe `lobe` at the offset vertex. The lobe is part
-// of the path, not the random number that chose it, so try the base's u_lobe
-// first and then both ends of the selection interval (lobe selection is a
-// threshold on u_lobe for every BSDF here).
-bool sample_dirac_lobe(const Bsdf& bsdf, const SurfaceInteraction& si, uint32_t lobe, float u_lobe,
-                       BsdfSample* out) {
-  for (float u : {u_lobe, 0.0f, 0.99999994f, 0.5f}) {
-    BsdfSample s;
-    if (bsdf_sample(bsdf, si.uv, si.wi, u, Vec2f(0.5f, 0.5f), &s) && s.lobe == lobe && !s.weight.is_black() &&
-        is_finite(s.weight) && s.pdf > 0) {
-      *out = s;
-      return true;
-    }
-  }
-  return false;
-}
-
 class CachedShift {
  public:
   CachedShift(const FrameScene& scene, const GptSettings& settings, const PathRecord& base, bool replay_prefix,
               PathCounters& counters, ShiftTrace* trace)
       : scene_(scene), desc_(scene.scene()), settings_(settings), base_(base), replay_prefix_(replay_prefix),
-        counters_(counters), trace_(trace) {}
+        counters_(counters), trace_(trace), acc_(base, settings.mis_epsilon, trace ? &trace->ratios : nullptr) {}
 
   ShiftResult run(const Ray& offset_ray);
 
@@ -40,27 +23,8 @@ class CachedShift {
   }
   bool diffuse(const Bsdf& b) const { return b.roughness() > settings_.diffuse_roughness; }
 
-  // One technique of the pair: balance heuristic on the accumulated ratio.
-  void technique(Rgb c_b, Rgb c_o, double ratio) {
-    if (trace_) trace_->ratios.push_back(ratio);
-    double w = pair_mis_weight(ratio, settings_.mis_epsilon);
-    if (w == 0.0) return;
-    Rgb wc_o = w == 1.0 ? Rgb(0.0f) : c_o * float(w);
-    if (!is_finite(wc_o)) wc_o = Rgb(0.0f);
-    result_.offset_primal += wc_o;
-    result_.gradient += wc_o - c_b * float(w);
-  }
-  // Shift failure from base vertex i on (§2): every later technique becomes a
-  // finite difference (offset 0, weight 1). `with_nee`: include x_i's emitter sampling.
-  void fail_from(size_t i, bool with_nee) {
-    result_.failed = true;
-    const auto& v = base_.v;
-    for (size_t j = i; j < v.size(); ++j) {
-      if (j > i) technique(v[j].emission, Rgb(0.0f), 0.0);
-      if (v[j].has_nee && (j > i || with_nee)) technique(v[j].nee, Rgb(0.0f), 0.0);
-      if (v[j].next == PathNext::kEscaped) technique(v[j].escape, Rgb(0.0f), 0.0);
-    }
-  }
+  void technique(Rgb c_b, Rgb c_o, double ratio) { acc_.technique(c_b, c_o, ratio); }
+  void fail_from(size_t i, bool with_nee) { acc_.fail_from(i, with_nee); }
   PathVertex* record(const SurfaceInteraction& si, const PathVertex& base_vertex) {
     if (!trace_) return nullptr;
     trace_->offset.v.push_back(base_vertex);
@@ -78,7 +42,7 @@ class CachedShift {
   const bool replay_prefix_;
   PathCounters& counters_;
   ShiftTrace* trace_;
-  ShiftResult result_;
+  ShiftAccumulator acc_;
 };
 
 ShiftResult CachedShift::run(const Ray& offset_ray) {
@@ -88,14 +52,14 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
     trace_->offset.clear();
     trace_->offset.camera_ray = offset_ray;
   }
-  if (verts.empty()) return result_;  // the base saw only the environment: nothing but `direct`
+  if (verts.empty()) return acc_.result();  // the base saw only the environment: nothing but `direct`
 
   // ---- x'_1: the offset's camera ray (same sub-pixel position, Jacobian 1 on the film) ----
   SurfaceInteraction so;
   ++counters_.rays;
   if (!scene_.intersect(offset_ray, &so)) {
     fail_from(0, true);
-    return result_;
+    return acc_.result();
   }
   OffsetState state = OffsetState::kNotReconnected;
   Rgb beta(1.0f);     // f(T x)|J| / p(x) of the offset prefix
@@ -122,25 +86,9 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
           float w = v.es.delta ? 1.0f : mis_power(v.es.pdf, be.pdf);
           c_o = beta * be.value * v.es.weight * w;
         }
-      } else if (bsdf_o.is_delta_only()) {
-        r = 0.0;  // the offset has no emitter sampling here: only the base generates this pair
       } else {
-        EmitterSample eo = scene_.sample_emitter_direction(so, v.u_select, v.u_light);
-        if (rec) rec->es = eo;
-        if (!(eo.pdf > 0) || !(v.es.pdf > 0)) {
-          r = 0.0;
-        } else if (!eo.weight.is_black()) {
-          BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, so.sh_frame.to_local(eo.d));
-          if (!be.value.is_black()) {
-            Ray shadow = so.spawn_ray(eo.d);
-            shadow.tmax = std::isinf(eo.dist) ? kInfinity : eo.dist * (1.0f - kShadowEpsilon);
-            ++counters_.rays;
-            if (!scene_.occluded(shadow)) {
-              float w = eo.delta ? 1.0f : mis_power(eo.pdf, be.pdf);
-              c_o = beta * be.value * eo.weight * w;
-            }
-          }
-        }
+        if (rec && !bsdf_o.is_delta_only()) rec->es = scene_.sample_emitter_direction(so, v.u_select, v.u_light);
+        c_o = offset_emitter_sampling(scene_, so, bsdf_o, v, beta, &r, counters_);
       }
       technique(v.nee, c_o, r);
     }
@@ -164,7 +112,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
       BsdfEval be = bsdf_eval_pdf(bsdf_b, v.si.uv, wo_reconnected, v.bs.wi);
       if (!(be.pdf > 0) || be.value.is_black()) {
         fail_from(i, false);
-        return result_;
+        return acc_.result();
       }
       if (rec) rec->bs.pdf = be.pdf, rec->bs.weight = be.value / be.pdf;
       beta *= be.value * (inv_q / v.bs.pdf);
@@ -196,7 +144,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
         float dist2_base = length_squared(d_base);
         if (!(dist2 > 0) || !(dist2_base > 0)) {
           fail_from(i, false);
-          return result_;
+          return acc_.result();
         }
         float dist = std::sqrt(dist2);
         dir = d / dist;
@@ -205,7 +153,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
         float cos_b = std::abs(dot(nv->si.n, d_base)) / std::sqrt(dist2_base);
         if (!(cos_o > 1e-6f) || !(cos_b > 1e-6f)) {
           fail_from(i, false);
-          return result_;
+          return acc_.result();
         }
         jacobian = (cos_o / cos_b) * (dist2_base / dist2);
         connect = so.spawn_ray(dir);
@@ -214,16 +162,28 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
       ++counters_.rays;
       if (scene_.occluded(connect)) {
         fail_from(i, false);
-        return result_;
+        return acc_.result();
       }
       Vec3f wi_o = so.sh_frame.to_local(dir);
       BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, wi_o);
       if (!(be.pdf > 0) || be.value.is_black() || !std::isfinite(jacobian)) {
         fail_from(i, false);
-        return result_;
+        return acc_.result();
       }
       beta *= be.value * (jacobian * inv_q / v.bs.pdf);
-      ratio *= double(be.pdf) * double(jacobian) / double(v.bs.pdf);
+      // MIS: the base's pdf along x_k -> x_{k+1} from the positions, as the
+      // offset's is (see temporal_reconnection_shift.cpp: the traced ray left
+      // from a point offset along the normal).
+      float pdf_b = v.bs.pdf;
+      if (!escaped) {
+        const Vec3f d_base = nv->si.p - v.si.p;
+        pdf_b = bsdf_eval_pdf(bsdf_b, v.si.uv, v.si.wi, v.si.sh_frame.to_local(normalize(d_base))).pdf;
+        if (!(pdf_b > 0)) {
+          fail_from(i, false);
+          return acc_.result();
+        }
+      }
+      ratio *= double(be.pdf) * double(jacobian) / double(pdf_b);
       if (rec) {
         rec->bs = v.bs;
         rec->bs.wi = wi_o, rec->bs.pdf = be.pdf, rec->bs.weight = be.value / be.pdf;
@@ -250,49 +210,15 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
     }
 
     // ---- Otherwise follow the base: replay (hybrid) or half-vector copy (reconnect) ----
-    Vec3f wi_o;
-    float pdf_o = 0;
-    bool delta_o = false;
-    if (replay_prefix_) {
-      // Replay: same random numbers; in path space the Jacobian is p_b/p_o, so the ratio stays 1.
-      BsdfSample s;
-      if (!bsdf_sample(bsdf_o, so.uv, so.wi, v.u_lobe, v.u_dir, &s) || s.weight.is_black() || !is_finite(s.weight)) {
-        fail_from(i, false);
-        return result_;
-      }
-      beta *= s.weight * inv_q;
-      wi_o = s.wi, pdf_o = s.pdf, delta_o = s.is_delta();
-      if (rec) rec->bs = s;
-    } else if (v.bs.is_delta()) {
-      // Dirac lobe: the offset takes the same lobe (the half vector is the normal; Jacobian 1).
-      BsdfSample s;
-      if (!sample_dirac_lobe(bsdf_o, so, v.bs.lobe, v.u_lobe, &s)) {
-        fail_from(i, false);
-        return result_;
-      }
-      beta *= s.weight * (s.pdf * inv_q / v.bs.pdf);
-      ratio *= double(s.pdf) / double(v.bs.pdf);
-      wi_o = s.wi, pdf_o = s.pdf, delta_o = true;
-      if (rec) rec->bs = s;
-    } else {
-      HalfVectorCopy hv;
-      if (!copy_half_vector(v.si.wi, v.bs.wi, v.bs.eta, so.wi, &hv)) {
-        fail_from(i, false);
-        return result_;
-      }
-      BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, hv.wi);
-      if (!(be.pdf > 0) || be.value.is_black()) {
-        fail_from(i, false);
-        return result_;
-      }
-      beta *= be.value * (hv.jacobian * inv_q / v.bs.pdf);
-      ratio *= double(be.pdf) * double(hv.jacobian) / double(v.bs.pdf);
-      wi_o = hv.wi, pdf_o = be.pdf;
-      if (rec) {
-        rec->bs = v.bs;
-        rec->bs.wi = hv.wi, rec->bs.pdf = be.pdf, rec->bs.weight = be.value / be.pdf;
-      }
+    FollowedBounce fb;
+    if (!follow_base_bounce(bsdf_o, so, v, replay_prefix_, inv_q, &beta, &ratio, &fb)) {
+      fail_from(i, false);
+      return acc_.result();
     }
+    const Vec3f wi_o = fb.wi;
+    const float pdf_o = fb.pdf;
+    const bool delta_o = fb.delta;
+    if (rec) rec->bs = fb.sample;
 
     const Vec3f d_o = so.sh_frame.to_world(wi_o);
     if (rec) rec->escape_dir = d_o;
@@ -301,7 +227,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
     const bool hit = scene_.intersect(so.spawn_ray(d_o), &sn);
     if (hit == escaped) {  // surface against environment
       fail_from(i, false);
-      return result_;
+      return acc_.result();
     }
     if (!hit) {
       Rgb le = scene_.eval_environment(d_o), c_o;
@@ -314,19 +240,13 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
     // diffuse, would reconnect where this one did not.
     if (diffuse_b && diffuse_o && diffuse(bsdf_at(sn))) {
       fail_from(i, false);
-      return result_;
+      return acc_.result();
     }
-    Rgb c_o;
-    if (scene_.emitter_of_shape(sn.shape) >= 0) {
-      Rgb le = scene_.eval_area_emitter(sn);
-      if (!le.is_black())
-        c_o = beta * le * (delta_o ? 1.0f : mis_power(pdf_o, scene_.pdf_emitter_direction(so.p, sn)));
-    }
-    technique(c_b_next, c_o, ratio);
+    technique(c_b_next, offset_emission(scene_, so.p, sn, beta, pdf_o, delta_o), ratio);
     so = sn;
     if (rec) rec = record(so, *nv);
   }
-  return result_;
+  return acc_.result();
 }
 
 }  // namespace

@@ -36,4 +36,42 @@ inline double pair_mis_weight(double ratio, double epsilon) {
   return 1.0 / (1.0 + ratio + epsilon);
 }
 
+// The techniques of one generation of a pair, in the base path's order: each
+// adds w (c_o − c_b) with w = pair_mis_weight(r); a shift failure from vertex
+// i on turns every later technique into a finite difference (c_o = 0, w = 1).
+// Shared by the spatial cached shifts and the temporal path-space shift.
+class ShiftAccumulator {
+ public:
+  ShiftAccumulator(const PathRecord& base, double mis_epsilon, std::vector<double>* ratios)
+      : base_(base), mis_epsilon_(mis_epsilon), ratios_(ratios) {}
+
+  void technique(Rgb c_b, Rgb c_o, double ratio) {
+    if (ratios_) ratios_->push_back(ratio);
+    const double w = pair_mis_weight(ratio, mis_epsilon_);
+    if (w == 0.0) return;
+    Rgb wc_o = w == 1.0 ? Rgb(0.0f) : c_o * float(w);
+    if (!is_finite(wc_o)) wc_o = Rgb(0.0f);
+    result_.offset_primal += wc_o;
+    result_.gradient += wc_o - c_b * float(w);
+  }
+  // Failure at base vertex i: its later techniques (and its own emitter
+  // sampling when `with_nee`) become finite differences.
+  void fail_from(size_t i, bool with_nee) {
+    result_.failed = true;
+    const auto& v = base_.v;
+    for (size_t j = i; j < v.size(); ++j) {
+      if (j > i) technique(v[j].emission, Rgb(0.0f), 0.0);
+      if (v[j].has_nee && (j > i || with_nee)) technique(v[j].nee, Rgb(0.0f), 0.0);
+      if (v[j].next == PathNext::kEscaped) technique(v[j].escape, Rgb(0.0f), 0.0);
+    }
+  }
+  const ShiftResult& result() const { return result_; }
+
+ private:
+  const PathRecord& base_;
+  const double mis_epsilon_;
+  std::vector<double>* ratios_;
+  ShiftResult result_;
+};
+
 }  // namespace gdvr

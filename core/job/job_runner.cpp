@@ -52,8 +52,11 @@ Expected<TgptSettings> tgpt_settings_for(const JobSpec& job) {
   if (!shift.ok()) return shift.status().with_context("job.");
   auto method = parse_recon_method(job.reconstruction.method);
   if (!method.ok()) return method.status().with_context("job.reconstruction.");
+  auto temporal_shift = parse_temporal_shift(job.temporal_shift);
+  if (!temporal_shift.ok()) return temporal_shift.status().with_context("job.");
   TgptSettings s;
   s.gpt = TgptSettings::gpt_defaults_for(shift.value());
+  s.temporal_shift = temporal_shift.value();
   s.recon.method = method.value();
   s.recon.alpha = job.reconstruction.alpha;
   s.window = job.reconstruction.window;
@@ -253,6 +256,25 @@ class JobRenderer {
       nb.next = &next_desc;
       nb.to_next = detect_changes(frame_desc_, next_desc);
     }
+    // The path-space temporal shift traces in the neighbours' scenes: keep one
+    // FrameScene per side, moved to the neighbour's time (built once).
+    if (pj_.tgpt_settings.temporal_shift == TemporalShiftMapping::kReconnect) {
+      auto scene_at = [&](const Scene& desc, std::unique_ptr<FrameScene>* slot) -> Status {
+        if (*slot) return (*slot)->update(desc);
+        auto fs = FrameScene::create(desc, pj_.animated_shapes);
+        if (!fs.ok()) return fs.status();
+        *slot = std::move(fs.value());
+        return Status::Ok();
+      };
+      if (nb.prev && nb.to_prev.any()) {
+        GDVR_RETURN_IF_ERROR(scene_at(prev_desc, &scene_prev_));
+        nb.prev_scene = scene_prev_.get();
+      }
+      if (nb.next && nb.to_next.any()) {
+        GDVR_RETURN_IF_ERROR(scene_at(next_desc, &scene_next_));
+        nb.next_scene = scene_next_.get();
+      }
+    }
     // Across a static pair, pass A of t replays pass B of t−1 in an identical
     // scene: same numbers, same image; copy it when we rendered it (and no
     // time budget made the pass sizes differ).
@@ -288,6 +310,7 @@ class JobRenderer {
   PreparedJob pj_;
   Scene frame_desc_;
   std::unique_ptr<FrameScene> scene_;
+  std::unique_ptr<FrameScene> scene_prev_, scene_next_;  // tgpt with temporal_shift reconnect
   GradientFilmBuffers last_b_;  // pass B of frame last_b_frame_, kept only across a static pair
   int last_b_frame_ = std::numeric_limits<int>::min();
 };

@@ -292,7 +292,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   const std::string p = "job";
   GDVR_RETURN_IF_ERROR(r.check_object(j, p, {"scene", "frames", "fps", "width", "height", "spp", "time_budget_s", "seed",
                                              "integrator", "shift", "reconstruction", "params", "animation", "tracks",
-                                             "outputs", "priority", "reference", "direct_light"}));
+                                             "outputs", "priority", "reference", "direct_light", "temporal_shift"}));
   JobSpec job;
   GDVR_RETURN_IF_ERROR(r.opt(j, "scene", p, &job.scene));
   GDVR_RETURN_IF_ERROR(r.opt(j, "frames", p, &job.frames));
@@ -304,6 +304,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   GDVR_RETURN_IF_ERROR(r.opt(j, "seed", p, &job.seed));
   GDVR_RETURN_IF_ERROR(r.opt(j, "integrator", p, &job.integrator));
   GDVR_RETURN_IF_ERROR(r.opt(j, "shift", p, &job.shift));
+  GDVR_RETURN_IF_ERROR(r.opt(j, "temporal_shift", p, &job.temporal_shift));
   GDVR_RETURN_IF_ERROR(r.opt(j, "priority", p, &job.priority));
   GDVR_RETURN_IF_ERROR(r.opt(j, "reference", p, &job.reference));
 
@@ -318,6 +319,8 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
     return r.error(p + ".integrator", "must be pt, gpt or tgpt, not '" + job.integrator + "'");
   if (job.shift != "replay" && job.shift != "reconnect" && job.shift != "hybrid")
     return r.error(p + ".shift", "must be replay, reconnect or hybrid, not '" + job.shift + "'");
+  if (job.temporal_shift != "replay" && job.temporal_shift != "reconnect")
+    return r.error(p + ".temporal_shift", "must be replay or reconnect, not '" + job.temporal_shift + "'");
   {
     auto frames = parse_frame_range(job.frames);
     if (!frames.ok()) return r.error(p + ".frames", frames.status().message());
@@ -403,6 +406,7 @@ std::string job_to_json(const JobSpec& job) {
   j["seed"] = std::to_string(job.seed);
   j["integrator"] = job.integrator;
   j["shift"] = job.shift;
+  j["temporal_shift"] = job.temporal_shift;
   j["reconstruction"] = {{"method", job.reconstruction.method},
                          {"alpha", job.reconstruction.alpha},
                          {"window", job.reconstruction.window}};

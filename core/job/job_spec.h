@@ -45,6 +45,7 @@ struct JobSpec {
   uint64_t seed = 0;
   std::string integrator = "pt";       // pt | gpt | tgpt
   std::string shift = "reconnect";     // replay | reconnect | hybrid
+  std::string temporal_shift = "replay";  // tgpt: replay | reconnect (path space)
   ReconstructionSpec reconstruction;
   DirectLightSpec direct_light;
   std::map<std::string, std::string> params;  // Mitsuba <default> overrides

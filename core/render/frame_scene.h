@@ -40,6 +40,11 @@ class FrameScene {
 
   bool intersect(const Ray& ray, SurfaceInteraction* si) const;
   bool occluded(const Ray& ray) const { return accel_->occluded(ray.o, ray.d, ray.tmin, ray.tmax); }
+  // Occluded by an animated shape (the only ones whose place can change
+  // between frames; static shapes are skipped).
+  bool occluded_by_animated(const Ray& ray) const {
+    return accel_->occluded(ray.o, ray.d, ray.tmin, ray.tmax, /* instanced_only = */ true);
+  }
 
   // ---- Emitters ----
   // Samples an emitter uniformly, then a direction towards it. Visibility is

@@ -46,6 +46,20 @@ LayeredImage tgpt_frame_layers(TgptFrameRender&& r) {
     L.add(s + "dx_var", kRgb, std::move(p->dx_var));
     L.add(s + "dy_var", kRgb, std::move(p->dy_var));
   }
+  // ---- Path-space temporal shift (reconnect): one generation each way ----
+  // dt_fwd: pass B's bases shifted into t+1, ≈ I_{t+1} − I_t; dt_bwd: pass A's
+  // bases shifted into t−1, negated, ≈ I_t − I_{t−1}.
+  if (!b.temporal.empty()) {
+    L.add("dt_fwd", kRgb, std::move(b.temporal));
+    L.add("dt_fwd_var", kRgb, std::move(b.temporal_var));
+    L.add("dt_fwd_failures", {"Y"}, std::move(b.temporal_failure_rate));
+  }
+  if (!a.temporal.empty()) {
+    for (float& x : a.temporal.data()) x = -x;
+    L.add("dt_bwd", kRgb, std::move(a.temporal));
+    L.add("dt_bwd_var", kRgb, std::move(a.temporal_var));
+    L.add("dt_bwd_failures", {"Y"}, std::move(a.temporal_failure_rate));
+  }
   if (!r.forward.offsets.empty()) L.add("motion", {"X", "Y", "V"}, std::move(r.forward.offsets));
   if (!r.backward.offsets.empty()) L.add("motion_back", {"X", "Y", "V"}, std::move(r.backward.offsets));
   return L;
@@ -74,7 +88,28 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
   const char* names[3] = {"primal", "dx", "dy"};
   Image* values[3] = {&g.dt, &g.dxdt, &g.dydt};
   Image* vars[3] = {&g.dt_var, &g.dxdt_var, &g.dydt_var};
-  for (int k = 0; k < 3; ++k) {
+  // Path-space dt (reconnect): the two generations of each pair, t's forward
+  // and t+1's backward; their MIS weights sum to one, so the sum estimates
+  // I_{t+1} − I_t. dxdt, dydt stay the replay differences below.
+  const ImageLayer* fwd = t.find("dt_fwd");
+  Image shift_failures;
+  if (fwd) {
+    const ImageLayer* bwd = next.find("dt_bwd");
+    const ImageLayer* fwd_var = t.find("dt_fwd_var");
+    const ImageLayer* bwd_var = next.find("dt_bwd_var");
+    const ImageLayer* fwd_fail = t.find("dt_fwd_failures");
+    const ImageLayer* bwd_fail = next.find("dt_bwd_failures");
+    if (!bwd || !fwd_var || !bwd_var || !fwd_fail || !bwd_fail)
+      return invalid_argument("tgpt: this frame has a forward temporal shift ('dt_fwd') but the next frame's buffers "
+                              "lack 'dt_bwd' (or a variance/failure layer): both must be rendered with temporal_shift "
+                              "reconnect");
+    if (bwd->image.data().size() != fwd->image.data().size())
+      return invalid_argument("tgpt: the next frame's buffers have a different size");
+    g.dt = sum(fwd->image, bwd->image);
+    g.dt_var = sum(fwd_var->image, bwd_var->image);
+    shift_failures = average(fwd_fail->image, bwd_fail->image, 0.5f);
+  }
+  for (int k = fwd ? 1 : 0; k < 3; ++k) {
     const std::string n = names[k];
     auto bt = need(t, ("b_" + n).c_str(), "this");
     auto an = need(next, ("a_" + n).c_str(), "next");
@@ -93,12 +128,18 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
     TemporalMask mask = temporal_consistency(forward->image, backward->image, settings);
     g.failed = mask.failed;
     g.failure_rate = std::move(mask.failure);
+    // Where the constraint is kept, the rate of failed path-space shifts.
+    if (!shift_failures.empty())
+      for (size_t p = 0; p < mask.valid.size(); ++p)
+        if (mask.valid[p]) g.failure_rate.data()[p] = shift_failures.data()[p];
     // Zero the dropped values too, so the EXR layers show what the solve uses.
     for (size_t p = 0; p < mask.valid.size(); ++p)
       if (!mask.valid[p])
         for (Image* im : values)
           for (int c = 0; c < 3; ++c) im->data()[p * 3 + c] = 0.0f;
     g.valid = std::move(mask.valid);
+  } else if (!shift_failures.empty()) {
+    g.failure_rate = std::move(shift_failures);
   }
   return g;
 }

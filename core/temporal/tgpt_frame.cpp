@@ -2,9 +2,33 @@
 
 #include <algorithm>
 #include <chrono>
+#include <memory>
 
 
 namespace gdvr {
+namespace {
+
+// A temporal shift's target frame with the camera and shape motions it needs
+// (owned here; TemporalShiftTarget points into it).
+class TemporalTarget {
+ public:
+  TemporalTarget() = default;
+  TemporalTarget(const FrameScene& other, const Scene& at_t, const Scene& at_other, int width, int height)
+      : camera_(std::make_unique<PerspectiveCamera>(at_other.camera, width, height)),
+        motion_(std::make_unique<ShapeMotion>(at_t, at_other)) {
+    target_.scene = &other;
+    target_.camera = camera_.get();
+    target_.motion = motion_.get();
+  }
+  const TemporalShiftTarget* target() const { return target_.scene ? &target_ : nullptr; }
+
+ private:
+  std::unique_ptr<PerspectiveCamera> camera_;
+  std::unique_ptr<ShapeMotion> motion_;
+  TemporalShiftTarget target_;
+};
+
+}  // namespace
 
 Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const FrameRenderSettings& render,
                                             const TgptSettings& settings, TgptPassStreams streams,
@@ -34,6 +58,19 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
   half.spp = tgpt_pass_spp(render.spp);
   if (half.time_budget_s > 0) half.time_budget_s = std::max(1e-3, 0.5 * (render.time_budget_s - direct_seconds));
 
+  // ---- Path-space temporal shift (reconnect): pass A's base paths go to the
+  // previous frame, pass B's to the next, where the pair changes ----
+  const bool reconnect = settings.temporal_shift == TemporalShiftMapping::kReconnect;
+  TemporalTarget backward, forward;
+  if (reconnect && nb.prev && nb.to_prev.any()) {
+    if (!nb.prev_scene) return failed_precondition("render_tgpt_frame: temporal_shift reconnect needs the previous frame's scene");
+    backward = TemporalTarget(*nb.prev_scene, *nb.at_t, *nb.prev, render.width, render.height);
+  }
+  if (reconnect && nb.next && nb.to_next.any()) {
+    if (!nb.next_scene) return failed_precondition("render_tgpt_frame: temporal_shift reconnect needs the next frame's scene");
+    forward = TemporalTarget(*nb.next_scene, *nb.at_t, *nb.next, render.width, render.height);
+  }
+
   // ---- Pass A (stream s(t)): the replayed offset of the previous frame's pass B ----
   FrameRenderControl control_a = control, control_b = control;
   if (control.on_progress) {
@@ -44,19 +81,20 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
     out.a = *reuse_a;
     out.reused_pass_a = true;
   } else {
-    auto a = render_frame_gpt(scene, half, settings.gpt, streams.a, control_a);
+    auto a = render_frame_gpt(scene, half, settings.gpt, streams.a, control_a, backward.target());
     if (!a.ok()) return a.status().with_context("pass A: ");
     out.a = std::move(a->buffers);
     out.rays += a->rays;
     out.invalid_samples += a->invalid_samples;
     out.spp += a->spp;
-    if (nb.prev && nb.to_prev.any()) out.temporal_rays += a->rays;
+    if (nb.prev && nb.to_prev.any()) out.temporal_rays += reconnect ? a->temporal_rays : a->rays;
   }
   // ---- Pass B (stream s(t_next)): replayed by the next frame's pass A ----
-  auto b = render_frame_gpt(scene, half, settings.gpt, streams.b, control_b);
+  auto b = render_frame_gpt(scene, half, settings.gpt, streams.b, control_b, forward.target());
   if (!b.ok()) return b.status().with_context("pass B: ");
   out.b = std::move(b->buffers);
   out.rays += b->rays;
+  out.temporal_rays += b->temporal_rays;
   out.invalid_samples += b->invalid_samples;
   out.spp += b->spp;
   if (out.reused_pass_a) out.spp += b->spp;

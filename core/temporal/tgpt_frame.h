@@ -26,6 +26,10 @@ struct TgptNeighbourhood {
   const Scene* prev = nullptr;
   const Scene* next = nullptr;
   FramePairChanges to_prev, to_next;  // detect_changes(prev, t), detect_changes(t, next)
+  // The neighbours as renderable scenes (their accelerators at their times):
+  // needed by temporal_shift = reconnect where the pair changes.
+  const FrameScene* prev_scene = nullptr;
+  const FrameScene* next_scene = nullptr;
 };
 
 struct TgptFrameRender {
@@ -38,8 +42,9 @@ struct TgptFrameRender {
   int spp = 0;               // both passes together
   uint64_t rays = 0;         // every ray this call traced (passes and motion vectors)
   // Rays whose results enter a non-zero temporal gradient: the motion-vector
-  // rays, plus pass A's rays when the pair (prev, t) changes (pass A is the
-  // replayed offset of the previous frame's dt). A static shot counts zero.
+  // rays, plus (replay) pass A's rays when the pair (prev, t) changes (pass A
+  // is the replayed offset of the previous frame's dt) or (reconnect) the
+  // temporal shifts' rays. A static shot counts zero.
   uint64_t temporal_rays = 0;
   uint64_t invalid_samples = 0;
   bool reused_pass_a = false;  // pass A taken from the previous frame's pass B (static pair)

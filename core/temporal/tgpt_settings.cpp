@@ -4,6 +4,16 @@
 
 namespace gdvr {
 
+const char* temporal_shift_name(TemporalShiftMapping m) {
+  return m == TemporalShiftMapping::kReconnect ? "reconnect" : "replay";
+}
+
+Expected<TemporalShiftMapping> parse_temporal_shift(const std::string& name) {
+  for (TemporalShiftMapping m : {TemporalShiftMapping::kReplay, TemporalShiftMapping::kReconnect})
+    if (name == temporal_shift_name(m)) return m;
+  return invalid_argument("temporal_shift: unknown '" + name + "' (expected replay or reconnect)");
+}
+
 Status TgptSettings::validate() const {
   GDVR_RETURN_IF_ERROR(gpt.validate().with_context("tgpt.gpt: "));
   GDVR_RETURN_IF_ERROR(recon.validate().with_context("tgpt.recon: "));
@@ -16,7 +26,7 @@ Status TgptSettings::validate() const {
 
 std::string TgptSettings::to_string() const {
   std::ostringstream s;
-  s << "tgpt{window=" << window << " hop=" << effective_hop() << " motion_vectors=" << (motion_vectors ? "on" : "off")
+  s << "tgpt{temporal_shift=" << temporal_shift_name(temporal_shift) << " window=" << window << " hop=" << effective_hop() << " motion_vectors=" << (motion_vectors ? "on" : "off")
     << " consistency_px=" << consistency_tolerance_px << " max_same_pixel_motion_px=" << max_same_pixel_motion_px
     << " gpt=" << gpt.to_string() << " recon=" << recon.to_string() << "}";
   return s.str();

@@ -12,10 +12,26 @@
 
 namespace gdvr {
 
+// How the temporal gradient dt is sampled (REFERENCE.md §4):
+enum class TemporalShiftMapping {
+  // replay: pass B of frame t and pass A of t+1 share their random numbers;
+  // dt = A_{t+1} − B_t (the public T-GPT code).
+  kReplay,
+  // reconnect: the path-space shift (core/gradient/temporal_reconnection_shift.h):
+  // pass B's base paths shifted into t+1 and pass A's into t−1 (the two
+  // generations of every pair, balance-heuristic MIS); dxdt, dydt still come
+  // from the replay pair.
+  kReconnect,
+};
+const char* temporal_shift_name(TemporalShiftMapping m);
+Expected<TemporalShiftMapping> parse_temporal_shift(const std::string& name);
+
 struct TgptSettings {
   // The spatial sampler of both half passes (its `recon` is ignored: the
   // window solve below uses `recon`). See gpt_defaults_for().
   GptSettings gpt = gpt_defaults_for(ShiftMapping::kReconnect);
+
+  TemporalShiftMapping temporal_shift = TemporalShiftMapping::kReplay;
 
   // ---- Motion vectors (primary-hit reprojection, REFERENCE.md §4) ----
   // Off: every temporal constraint is kept (same-pixel dt is unbiased anyway).

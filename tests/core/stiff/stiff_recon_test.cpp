@@ -208,8 +208,9 @@ TEST_P(StiffReconNonFiniteTest, DroppedCountedAndOutputFinite) {
   std::printf("[ recon NaN ] %s: %s\n", recon_method_name(GetParam()), r->stats.to_string().c_str());
   // Every solver drops at least the primal's bad values (the only term every method reads).
   EXPECT_GE(r->stats.non_finite_constraints[term_index(Term::kPrimal)], 2 * frames);
-  if (GetParam() == ReconMethod::kL2 || GetParam() == ReconMethod::kL1)
+  if (GetParam() == ReconMethod::kL2 || GetParam() == ReconMethod::kL1) {
     for (Term t : {Term::kDx, Term::kDy, Term::kDt}) EXPECT_GT(r->stats.non_finite_constraints[term_index(t)], 0);
+  }
   // The clean pixels still look like the primal (0.5).
   double m = 0;
   for (float v : r->frames[0].data()) m += v;

@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <map>
+#include <ostream>
 
 #include "core/job/job_runner.h"
 #include "core/render/frame_scene.h"
@@ -18,8 +19,12 @@ namespace {
 
 constexpr int kRes = 16;
 
-JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed) {
+// `camera_moves`: the camera also dollies (the path-space shift reconnects
+// where the replayed paths decorrelate after the first bounce).
+JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed, bool camera_moves = false,
+                   const std::string& temporal_shift = "replay") {
   JobSpec job;
+  job.temporal_shift = temporal_shift;
   job.scene = "cbox_demo.xml";
   job.frames = "0,6";  // consecutive frames of the job, a quarter second apart: a clear change
   job.fps = 24;
@@ -32,7 +37,24 @@ JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed) {
   box.target = "smallbox";
   box.keys = {Keyframe{0.0, Transform()}, Keyframe{1.0, Transform::translate({-70, 0, -60})}};
   job.animation.tracks.push_back(box);
+  if (camera_moves) {
+    Track cam;
+    cam.target = "sensor";
+    Transform t0, t1;
+    EXPECT_TRUE(Transform::look_at({278, 273, -800}, {278, 273, -799}, {0, 1, 0}, &t0));
+    EXPECT_TRUE(Transform::look_at({250, 280, -680}, {275, 265, 0}, {0, 1, 0}, &t1));
+    cam.keys = {Keyframe{0.0, t0}, Keyframe{1.0, t1}};
+    job.animation.tracks.push_back(cam);
+  }
   return job;
+}
+
+struct TemporalCase {
+  const char* temporal_shift;
+  bool camera_moves;
+};
+void PrintTo(const TemporalCase& c, std::ostream* os) {
+  *os << c.temporal_shift << (c.camera_moves ? "/camera_moves" : "/box_moves");
 }
 
 std::map<int, FrameBuffers> render(const JobSpec& job) {
@@ -48,9 +70,14 @@ std::map<int, FrameBuffers> render(const JobSpec& job) {
   return out;
 }
 
-TEST(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
+class TemporalGradientTest : public ::testing::TestWithParam<TemporalCase> {};
+
+TEST_P(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
+  const TemporalCase tc = GetParam();
   // ---- Converged reference: PT, indirect part (color − direct), 2048 spp ----
-  auto ref = render(moving_job("pt", 2048, 77));
+  static std::map<bool, std::map<int, FrameBuffers>> references;
+  if (!references.count(tc.camera_moves)) references[tc.camera_moves] = render(moving_job("pt", 2048, 77, tc.camera_moves));
+  auto& ref = references[tc.camera_moves];
   ASSERT_EQ(ref.size(), 2u);
   auto indirect = [&](int f, int x, int y, int c) {
     return double(ref[f].layers.find("")->image.at(x, y, c)) - ref[f].layers.find("direct")->image.at(x, y, c);
@@ -84,7 +111,10 @@ TEST(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
   std::vector<double> sum(3 * n, 0.0), sum_sq(3 * n, 0.0);
   double moved = 0;
   for (int s = 0; s < kSeeds; ++s) {
-    auto b = render(moving_job("tgpt", 32, 1000 + 7919 * uint64_t(s)));
+    auto b = render(moving_job("tgpt", 32, 1000 + 7919 * uint64_t(s), tc.camera_moves, tc.temporal_shift));
+    if (std::string(tc.temporal_shift) == "reconnect") {
+      ASSERT_TRUE(b[0].layers.find("dt_fwd") && b[6].layers.find("dt_bwd")) << "no path-space temporal layers";
+    }
     ASSERT_EQ(b.size(), 2u);
     auto tg = temporal_gradients(b[0].layers, b[6].layers, settings);
     ASSERT_TRUE(tg.ok()) << tg.status().to_string();
@@ -101,13 +131,14 @@ TEST(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
   for (size_t k = 0; k < n; ++k) moved += std::abs(fd[k]);
   EXPECT_GT(moved, 1e-3) << "the test needs a visible change between the frames";
   for (int t = 0; t < 3; ++t) {
-    double z2 = 0, sum_d = 0, sum_v = 0;
+    double z2 = 0, sum_d = 0, sum_v = 0, sum_est_var = 0;
     int count = 0;
     for (size_t k = t * n; k < (t + 1) * n; ++k) {
       if (!defined[k]) continue;
       const double mean = sum[k] / kSeeds;
       const double var = std::max(0.0, (sum_sq[k] - kSeeds * mean * mean) / (kSeeds - 1)) / kSeeds;
       const double d = mean - fd[k], v = var + fd_var[k];
+      sum_est_var += var * kSeeds;  // one seed's variance
       if (!(v > 1e-12)) {
         EXPECT_NEAR(d, 0.0, 1e-4);
         continue;
@@ -119,16 +150,25 @@ TEST(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
     }
     z2 /= std::max(1, count);
     const double agg = sum_v > 0 ? sum_d / std::sqrt(sum_v) : 0;
-    std::printf("[ temporal ] %s: mean z^2 %.3f over %d, aggregate z %.2f\n", t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt",
-                z2, count, agg);
+    std::printf("[ temporal ] %s/%s: mean z^2 %.3f over %d, aggregate z %.2f, estimator variance %.3g\n",
+                tc.temporal_shift, t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt", z2, count, agg,
+                sum_est_var / std::max(1, count));
     // Student t with 11 dof: E[z^2] = 11/9; a biased estimator shows as a clear excess.
     EXPECT_LT(z2, 1.8);
     EXPECT_LT(std::abs(agg), 4.5);
   }
 }
 
+INSTANTIATE_TEST_SUITE_P(Shifts, TemporalGradientTest,
+                         ::testing::Values(TemporalCase{"replay", false}, TemporalCase{"reconnect", false},
+                                           TemporalCase{"replay", true}, TemporalCase{"reconnect", true}),
+                         [](const auto& info) {
+                           return std::string(info.param.temporal_shift) +
+                                  (info.param.camera_moves ? "_camera_moves" : "_box_moves");
+                         });
+
 // The frame renderer's ray accounting: zero temporal rays across static pairs.
-TEST(TemporalGradientTest, StaticNeighboursTraceNoTemporalRays) {
+TEST(TemporalRayTest, StaticNeighboursTraceNoTemporalRays) {
   LoadOptions load;
   load.params = {{"res", std::to_string(kRes)}};
   auto desc = load_mitsuba_scene(std::string(GDVR_SOURCE_DIR) + "/scenes/demo/cbox_demo.xml", load);
