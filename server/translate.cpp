@@ -70,6 +70,7 @@ void to_proto(const FrameStats& s, v1::FrameStats* out) {
   out->set_spp(s.spp);
   out->set_samples(s.samples);
   out->set_rays(s.rays);
+  out->set_temporal_rays(s.temporal_rays);
   out->set_samples_per_second(s.samples_per_second);
   out->set_rays_per_second(s.rays_per_second);
   for (const auto& l : s.left_out) out->add_left_out(l);

@@ -294,6 +294,7 @@ class JobRenderer {
     st.render_seconds = r.seconds;
     st.spp = r.spp;
     st.rays = r.rays;
+    st.temporal_rays = r.temporal_rays;
     if (r.invalid_samples > 0)
       st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples or gradients dropped");
     bool glossy = false;

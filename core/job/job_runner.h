@@ -23,6 +23,9 @@ struct FrameStats {
   int spp = 0;
   uint64_t samples = 0;        // camera samples
   uint64_t rays = 0;           // every ray traced (closest hit and shadow)
+  // Rays whose results enter a non-zero temporal gradient (tgpt): motion
+  // vectors and temporal offsets. 0 for pt, gpt and static frame pairs.
+  uint64_t temporal_rays = 0;
   double samples_per_second = 0;
   double rays_per_second = 0;
   std::vector<std::string> left_out;  // what the pipeline skipped, and why

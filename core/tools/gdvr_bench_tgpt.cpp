@@ -200,10 +200,13 @@ int quality(const Args& a) {
   // temporal terms; gpt: the G-PT integrator with its own defaults; pt-sd:
   // PT with the same stratified direct-light pass the gradient methods use,
   // the stronger baseline (pt alone is Mitsuba's estimator).
-  const std::vector<std::string> methods = {"tgpt", "tgpt-w1", "gpt", "pt", "pt-sd"};
+  // tgpt-rc: T-GPT with the path-space temporal shift (temporal_shift reconnect).
+  const std::vector<std::string> methods = {"tgpt", "tgpt-rc", "tgpt-w1", "gpt", "pt", "pt-sd"};
   auto configure = [&](JobSpec* job, const std::string& m) {
-    job->integrator = m == "tgpt-w1" ? "tgpt" : m == "pt-sd" ? "pt" : m;
+    const bool tgpt = m.rfind("tgpt", 0) == 0;
+    job->integrator = tgpt ? "tgpt" : m == "pt-sd" ? "pt" : m;
     job->reconstruction.window = m == "tgpt-w1" ? 1 : a.window;
+    job->temporal_shift = m == "tgpt-rc" ? "reconnect" : "replay";
     if (m == "pt-sd") job->direct_light = {4, 16};
   };
   std::map<std::string, double> per_spp, fixed;

@@ -289,6 +289,7 @@ json stats_to_json(const FrameStats& s) {
           {"spp", s.spp},
           {"samples", s.samples},
           {"rays", s.rays},
+          {"temporal_rays", s.temporal_rays},
           {"samples_per_second", s.samples_per_second},
           {"rays_per_second", s.rays_per_second},
           {"left_out", s.left_out},
@@ -303,6 +304,7 @@ FrameStats stats_from_json(const json& j) {
   s.spp = j.value("spp", 0);
   s.samples = j.value("samples", uint64_t(0));
   s.rays = j.value("rays", uint64_t(0));
+  s.temporal_rays = j.value("temporal_rays", uint64_t(0));
   s.samples_per_second = j.value("samples_per_second", 0.0);
   s.rays_per_second = j.value("rays_per_second", 0.0);
   s.left_out = j.value("left_out", std::vector<std::string>());

@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
   stats["frames"] = nlohmann::json::array();
   Status write_status;
   double total_seconds = 0;
-  uint64_t total_rays = 0, total_samples = 0;
+  uint64_t total_rays = 0, total_temporal_rays = 0, total_samples = 0;
   std::map<std::string, int> left_out_totals;
 
   JobCallbacks callbacks;
@@ -146,11 +146,12 @@ int main(int argc, char** argv) {
     if (!st.ok() && write_status.ok()) write_status = st;
     const FrameStats& s = out.stats;
     stats["frames"].push_back({{"frame", s.frame}, {"file", path.filename().string()}, {"render_seconds", s.render_seconds},
-                               {"spp", s.spp}, {"samples", s.samples}, {"rays", s.rays},
+                               {"spp", s.spp}, {"samples", s.samples}, {"rays", s.rays}, {"temporal_rays", s.temporal_rays},
                                {"samples_per_second", s.samples_per_second}, {"rays_per_second", s.rays_per_second},
                                {"left_out", s.left_out}});
     total_seconds += s.render_seconds;
     total_rays += s.rays;
+    total_temporal_rays += s.temporal_rays;
     total_samples += s.samples;
     for (const auto& l : s.left_out) left_out_totals[l]++;
     std::fprintf(stderr, "\rframe %d: %.2f s, %d spp, %.2f Mrays/s -> %s\n", s.frame, s.render_seconds, s.spp,
@@ -158,7 +159,8 @@ int main(int argc, char** argv) {
   };
 
   Status st = run_job(job, options, callbacks, &g_cancel);
-  stats["total"] = {{"render_seconds", total_seconds}, {"rays", total_rays}, {"samples", total_samples},
+  stats["total"] = {{"render_seconds", total_seconds}, {"rays", total_rays}, {"temporal_rays", total_temporal_rays},
+                    {"samples", total_samples},
                     {"rays_per_second", total_seconds > 0 ? double(total_rays) / total_seconds : 0.0},
                     {"left_out", left_out_totals}};
   stats["status"] = st.ok() ? "completed" : status_code_name(st.code());

@@ -16,8 +16,9 @@ namespace {
 
 std::string demo_dir() { return std::string(GDVR_SOURCE_DIR) + "/scenes/demo"; }
 
-JobSpec tgpt_job(const std::string& frames, bool animated, int window) {
+JobSpec tgpt_job(const std::string& temporal_shift, const std::string& frames, bool animated, int window) {
   JobSpec job;
+  job.temporal_shift = temporal_shift;
   job.scene = "cbox_demo.xml";
   job.frames = frames;
   job.fps = 24;
@@ -66,8 +67,11 @@ void expect_finite_layers(const FrameOutput& f) {
     for (float v : l.image.data()) ASSERT_TRUE(std::isfinite(v)) << "frame " << f.frame << " layer " << l.name;
 }
 
-TEST(TgptJobTest, StaticShotHasExactlyZeroTemporalGradients) {
-  auto out = run(tgpt_job("0-3", /* animated = */ false, /* window = */ 4));
+// Every test runs with both temporal shifts (replay, reconnect).
+class TgptJobTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(TgptJobTest, StaticShotHasExactlyZeroTemporalGradients) {
+  auto out = run(tgpt_job(GetParam(), "0-3", /* animated = */ false, /* window = */ 4));
   ASSERT_EQ(out.size(), 4u);
   for (const FrameOutput& f : out) {
     expect_finite_layers(f);
@@ -80,12 +84,13 @@ TEST(TgptJobTest, StaticShotHasExactlyZeroTemporalGradients) {
         << f.frame;
     // Pass A of frames 1..3 is the previous pass B, copied, not rendered.
     EXPECT_EQ(has(f.stats.left_out, "pass A: equals the previous frame's pass B"), f.frame > 0);
+    EXPECT_EQ(f.stats.temporal_rays, 0u) << "a static shot traces no temporal ray";
   }
 }
 
 // A fully static pair traces no temporal rays; a moving one does.
-TEST(TgptJobTest, StaticPairTracesZeroTemporalRays) {
-  JobSpec job = tgpt_job("0-1", false, 2);
+TEST_P(TgptJobTest, StaticPairTracesZeroTemporalRays) {
+  JobSpec job = tgpt_job(GetParam(), "0-1", false, 2);
   JobRunOptions options;
   options.base_dir = demo_dir();
   options.threads = 2;
@@ -108,8 +113,8 @@ TEST(TgptJobTest, StaticPairTracesZeroTemporalRays) {
   EXPECT_EQ(buffers[0].layers.find("b_primal")->image.data(), buffers[1].layers.find("a_primal")->image.data());
 }
 
-TEST(TgptJobTest, StaticShotEqualsReconstructingWithZeroDt) {
-  JobSpec job = tgpt_job("0-2", false, 3);
+TEST_P(TgptJobTest, StaticShotEqualsReconstructingWithZeroDt) {
+  JobSpec job = tgpt_job(GetParam(), "0-2", false, 3);
   auto out = run(job);
   ASSERT_EQ(out.size(), 3u);
   GradientWindow window;
@@ -141,8 +146,8 @@ TEST(TgptJobTest, StaticShotEqualsReconstructingWithZeroDt) {
   }
 }
 
-TEST(TgptJobTest, WindowOfOneIsSpatialGpt) {
-  JobSpec job = tgpt_job("0-2", true, 1);
+TEST_P(TgptJobTest, WindowOfOneIsSpatialGpt) {
+  JobSpec job = tgpt_job(GetParam(), "0-2", true, 1);
   auto out = run(job);
   ASSERT_EQ(out.size(), 3u);
   for (const FrameOutput& f : out) {
@@ -170,9 +175,9 @@ TEST(TgptJobTest, WindowOfOneIsSpatialGpt) {
   }
 }
 
-TEST(TgptJobTest, TwoFrameShotAndWindowLongerThanShot) {
+TEST_P(TgptJobTest, TwoFrameShotAndWindowLongerThanShot) {
   for (int window : {2, 20}) {
-    auto out = run(tgpt_job("0-1", true, window));
+    auto out = run(tgpt_job(GetParam(), "0-1", true, window));
     ASSERT_EQ(out.size(), 2u) << window;
     EXPECT_EQ(out[0].frame, 0);
     EXPECT_EQ(out[1].frame, 1);
@@ -186,8 +191,8 @@ TEST(TgptJobTest, TwoFrameShotAndWindowLongerThanShot) {
   }
 }
 
-TEST(TgptJobTest, SingleFrameJobHasNoTemporalBuffers) {
-  auto out = run(tgpt_job("3", true, 20));
+TEST_P(TgptJobTest, SingleFrameJobHasNoTemporalBuffers) {
+  auto out = run(tgpt_job(GetParam(), "3", true, 20));
   ASSERT_EQ(out.size(), 1u);
   expect_finite_layers(out[0]);
   for (const char* name : {"dt", "dxdt", "dydt", "temporal_failure_rate", "motion"})
@@ -198,8 +203,8 @@ TEST(TgptJobTest, SingleFrameJobHasNoTemporalBuffers) {
 
 // Frames come out in order, each as soon as its windows are rendered, and a
 // stand-alone finalize of each frame (a farm's stage 2) gives the same image.
-TEST(TgptJobTest, StreamsInOrderAndStagesAgree) {
-  JobSpec job = tgpt_job("0-6", true, 4);
+TEST_P(TgptJobTest, StreamsInOrderAndStagesAgree) {
+  JobSpec job = tgpt_job(GetParam(), "0-6", true, 4);
   JobRunOptions options;
   options.base_dir = demo_dir();
   options.threads = 2;
@@ -234,7 +239,18 @@ TEST(TgptJobTest, StreamsInOrderAndStagesAgree) {
   // Moving pairs carry motion fields and count temporal failures somewhere.
   EXPECT_NE(buffers[0].layers.find("motion"), nullptr);
   EXPECT_NE(buffers[1].layers.find("motion_back"), nullptr);
+  // The path-space shift's two generations: forward from every frame but the
+  // last, backward from every frame but the first.
+  const bool reconnect = GetParam() == "reconnect";
+  for (int f : all) {
+    EXPECT_GT(buffers[f].stats.temporal_rays, 0u) << f;
+    EXPECT_EQ(buffers[f].layers.find("dt_fwd") != nullptr, reconnect && f < 6) << f;
+    EXPECT_EQ(buffers[f].layers.find("dt_bwd") != nullptr, reconnect && f > 0) << f;
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(TemporalShift, TgptJobTest, ::testing::Values("replay", "reconnect"),
+                         [](const auto& info) { return info.param; });
 
 }  // namespace
 }  // namespace gdvr
