@@ -169,7 +169,8 @@ TEST_P(StiffInjectTest, NonFiniteBuffersNeverReachTheOutput) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Stiff, StiffInjectTest,
-                         ::testing::Values(Integ::kGptReplay, Integ::kGptReconnect, Integ::kGptHybrid, Integ::kTgpt),
+                         ::testing::Values(Integ::kGptReplay, Integ::kGptReconnect, Integ::kGptHybrid, Integ::kTgpt,
+                                           Integ::kTgptPathSpace),
                          [](const auto& info) { return std::string(integ_name(info.param)); });
 
 // ---- NaN / Inf in every term of a GradientWindow, every method ----

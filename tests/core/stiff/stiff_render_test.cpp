@@ -26,7 +26,7 @@ constexpr double kMaxErrorRatio = 0.35;  // 1/16 expected; heavy tails (caustics
 TEST_P(StiffRenderTest, FiniteLayersAndConvergesToPt) {
   const StiffCase& c = GetParam().c;
   const Integ integ = GetParam().integ;
-  const bool animated = integ == Integ::kTgpt;
+  const bool animated = is_tgpt(integ);
   // Two seeds per budget; relMSE with the worst 1 % of terms trimmed (fireflies).
   std::vector<FrameOutput> lo, hi;
   for (uint64_t seed : {11, 13}) {

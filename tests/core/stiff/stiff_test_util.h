@@ -129,7 +129,9 @@ inline Expected<Scene> load_case(const StiffCase& c) {
 
 // ---- Integrators ----
 
-enum class Integ { kPt, kGptReplay, kGptReconnect, kGptHybrid, kTgpt };
+// kTgpt: the default temporal shift (replay); kTgptPathSpace: temporal_shift reconnect.
+enum class Integ { kPt, kGptReplay, kGptReconnect, kGptHybrid, kTgpt, kTgptPathSpace };
+inline bool is_tgpt(Integ i) { return i == Integ::kTgpt || i == Integ::kTgptPathSpace; }
 inline const char* integ_name(Integ i) {
   switch (i) {
     case Integ::kPt: return "pt";
@@ -137,12 +139,13 @@ inline const char* integ_name(Integ i) {
     case Integ::kGptReconnect: return "gpt_reconnect";
     case Integ::kGptHybrid: return "gpt_hybrid";
     case Integ::kTgpt: return "tgpt";
+    case Integ::kTgptPathSpace: return "tgpt_pathspace";
   }
   return "?";
 }
 inline const std::vector<Integ>& all_integrators() {
-  static const std::vector<Integ> v = {Integ::kPt, Integ::kGptReplay, Integ::kGptReconnect, Integ::kGptHybrid,
-                                       Integ::kTgpt};
+  static const std::vector<Integ> v = {Integ::kPt,         Integ::kGptReplay, Integ::kGptReconnect,
+                                       Integ::kGptHybrid,  Integ::kTgpt,      Integ::kTgptPathSpace};
   return v;
 }
 
@@ -178,8 +181,10 @@ inline JobSpec make_job(const StiffCase& c, Integ integ, int spp, uint64_t seed)
     case Integ::kGptReconnect: job.integrator = "gpt", job.shift = "reconnect"; break;
     case Integ::kGptHybrid: job.integrator = "gpt", job.shift = "hybrid"; break;
     case Integ::kTgpt:
+    case Integ::kTgptPathSpace:
       job.integrator = "tgpt";
       job.shift = "reconnect";
+      job.temporal_shift = integ == Integ::kTgptPathSpace ? "reconnect" : "replay";
       job.frames = "0-1";
       job.reconstruction.window = 2;
       job.animation = camera_slide(c);
