@@ -5,7 +5,9 @@
 // Writes DIR/frame_0000.exr ... and DIR/stats.json. Ctrl-C cancels cleanly.
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -15,7 +17,10 @@
 #include <string>
 
 #include "core/io/image_io.h"
+#include "core/gradient/gpt_settings.h"
 #include "core/job/job_runner.h"
+#include "core/recon/recon_settings.h"
+#include "core/temporal/tgpt_settings.h"
 #include "core/job/job_spec.h"
 #include "core/tools/cli_args.h"
 
@@ -28,8 +33,11 @@ int usage(const char* msg) {
   if (msg) std::fprintf(stderr, "gdvr-render: %s\n", msg);
   std::fprintf(stderr,
                "usage: gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]\n"
-               "       [--frames A-B] [--threads N] [--seed N] [--integrator pt] [--width W] [--height H]\n"
-               "       [--param NAME=VALUE ...]\n");
+               "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
+               "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
+               "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W]\n"
+               "       [--param NAME=VALUE ...]\n"
+               "Flags override the job file; values are checked with the job (errors name the field).\n");
   return 2;
 }
 
@@ -52,7 +60,9 @@ int main(int argc, char** argv) {
   bool have_frames = false;
   JobSpec overrides;
   int threads = 0;
-  bool seed_set = false, integrator_set = false;
+  bool seed_set = false, integrator_set = false, alpha_set = false;
+  std::string shift, temporal_shift, recon;
+  int window = 0;
   std::map<std::string, std::string> params;
 
   for (int i = 1; i < argc; ++i) {
@@ -75,6 +85,18 @@ int main(int argc, char** argv) {
     else if (a == "--threads") { if (!parse_int(next("--threads"), 1, 1024, &v)) return usage("--threads: expected 1..1024"); threads = int(v); }
     else if (a == "--seed") { if (!parse_int(next("--seed"), 0, (1LL << 62), &v)) return usage("--seed: expected a non-negative integer"); overrides.seed = uint64_t(v); seed_set = true; }
     else if (a == "--integrator") { overrides.integrator = next("--integrator"); integrator_set = true; }
+    else if (a == "--shift") shift = next("--shift");
+    else if (a == "--temporal-shift") temporal_shift = next("--temporal-shift");
+    else if (a == "--recon") recon = next("--recon");
+    else if (a == "--alpha") {
+      const char* text = next("--alpha");
+      char* end = nullptr;
+      overrides.reconstruction.alpha = std::strtod(text, &end);
+      if (end == text || *end != '\0' || !(overrides.reconstruction.alpha >= 0) || !std::isfinite(overrides.reconstruction.alpha))
+        return usage("--alpha: expected a finite number >= 0");
+      alpha_set = true;
+    }
+    else if (a == "--window") { if (!parse_int(next("--window"), 1, 1000, &v)) return usage("--window: expected 1..1000"); window = int(v); }
     else if (a == "--width") { if (!parse_int(next("--width"), 1, 16384, &v)) return usage("--width: expected 1..16384"); overrides.width = int(v); }
     else if (a == "--height") { if (!parse_int(next("--height"), 1, 16384, &v)) return usage("--height: expected 1..16384"); overrides.height = int(v); }
     else if (a == "--param" || a == "-D") {
@@ -88,6 +110,11 @@ int main(int argc, char** argv) {
     else return usage(("unexpected argument " + a).c_str());
   }
   if (input.empty()) return usage("no scene or job file given");
+  // The same names the job file accepts (checked here too: a pt job ignores them).
+  if (!shift.empty() && !parse_shift_mapping(shift).ok()) return usage(parse_shift_mapping(shift).status().message().c_str());
+  if (!temporal_shift.empty() && !parse_temporal_shift(temporal_shift).ok())
+    return usage(parse_temporal_shift(temporal_shift).status().message().c_str());
+  if (!recon.empty() && !parse_recon_method(recon).ok()) return usage(parse_recon_method(recon).status().message().c_str());
   if (out_dir.empty()) return usage("--out DIR is required");
 
   JobRunOptions options;
@@ -111,6 +138,11 @@ int main(int argc, char** argv) {
   if (overrides.height) job.height = overrides.height;
   if (seed_set) job.seed = overrides.seed;
   if (integrator_set) job.integrator = overrides.integrator;
+  if (!shift.empty()) job.shift = shift;
+  if (!temporal_shift.empty()) job.temporal_shift = temporal_shift;
+  if (!recon.empty()) job.reconstruction.method = recon;
+  if (alpha_set) job.reconstruction.alpha = overrides.reconstruction.alpha;
+  if (window > 0) job.reconstruction.window = window;
   for (auto& [k, val] : params) job.params[k] = val;
 
   std::error_code ec;
