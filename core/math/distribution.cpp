@@ -16,13 +16,33 @@ Distribution1D::Distribution1D(std::vector<float> weights) {
     cdf_[i] = sum;
   }
   total_ = sum;
-  if (!(total_ > 0)) cdf_.clear();
+  if (!(total_ > 0)) {
+    cdf_.clear();
+    return;
+  }
+  const size_t g = cdf_.size();
+  guide_.resize(g);
+  size_t i = 0;
+  for (size_t k = 0; k < g; ++k) {
+    const double threshold = total_ * (double(k) / double(g));
+    while (i + 1 < cdf_.size() && cdf_[i] <= threshold) ++i;
+    guide_[k] = uint32_t(i);
+  }
 }
 
 size_t Distribution1D::sample(float u, float* u_remapped) const {
-  double target = double(u) * total_;
-  size_t i = size_t(std::upper_bound(cdf_.begin(), cdf_.end(), target) - cdf_.begin());
-  i = std::min(i, cdf_.size() - 1);
+  if (cdf_.empty()) {  // no positive weight: callers check empty(); stay in bounds anyway
+    if (u_remapped) *u_remapped = u;
+    return 0;
+  }
+  const double target = double(u) * total_;
+  // The first bin whose cdf exceeds target (upper_bound), found from the
+  // cutpoint; the backward step keeps it exact whatever the rounding of
+  // target against the cutpoint thresholds.
+  const size_t n = cdf_.size();
+  size_t i = guide_[std::min(n - 1, size_t(double(u) * double(n)))];
+  while (i > 0 && cdf_[i - 1] > target) --i;
+  while (i + 1 < n && cdf_[i] <= target) ++i;
   while (weights_[i] == 0 && i > 0) --i;  // never land on a zero-weight bin
   if (u_remapped) {
     double lo = i > 0 ? cdf_[i - 1] : 0.0;

@@ -2,6 +2,7 @@
 // (emitter selection by area, environment maps by luminance).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "core/math/vec.h"
@@ -23,6 +24,11 @@ class Distribution1D {
 
  private:
   std::vector<double> weights_, cdf_;  // double: long lists of tiny triangles
+  // Cutpoints (Chen & Asau 1974): guide_[k] is the first bin whose cdf exceeds
+  // k/G of the total, so a sample starts its search there and moves a step or
+  // two, instead of a binary search over the whole cdf (a 1024-column
+  // environment map row: 10 dependent, cache-missing steps).
+  std::vector<uint32_t> guide_;
   double total_ = 0;
 };
 

@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include <algorithm>
+
 namespace gdvr {
 namespace {
 
@@ -14,6 +18,34 @@ TEST(DistributionTest, OneDimensionalFrequenciesFollowWeights) {
   EXPECT_NEAR(counts[0] / double(n), 0.125, 1e-3);
   EXPECT_NEAR(counts[3] / double(n), 0.5, 1e-3);
   EXPECT_FLOAT_EQ(d.pmf(2), 0.375f);
+}
+
+// The cutpoint search picks exactly the bin a binary search over the cdf
+// would (std::upper_bound), with runs of zero weights, huge ranges and u near 1.
+TEST(DistributionTest, CutpointSearchEqualsBinarySearch) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> uni(0.0f, 1.0f);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int n = 1 + int(rng() % 300);
+    std::vector<float> w(static_cast<size_t>(n));
+    for (float& x : w) {
+      const float r = uni(rng);
+      x = r < 0.3f ? 0.0f : r < 0.4f ? 1e-6f * uni(rng) : r < 0.45f ? 1e6f * uni(rng) : uni(rng);
+    }
+    w[size_t(rng() % size_t(n))] = 1.0f;  // at least one positive weight
+    Distribution1D d(w);
+    std::vector<double> cdf;
+    double sum = 0;
+    for (float x : w) cdf.push_back(sum += x);
+    for (int s = 0; s < 2000; ++s) {
+      const float u = s < 4 ? std::vector<float>{0.0f, 0x1.fffffep-1f, 0.5f, 1e-30f}[size_t(s)] : uni(rng);
+      size_t expect = size_t(std::upper_bound(cdf.begin(), cdf.end(), double(u) * sum) - cdf.begin());
+      expect = std::min(expect, cdf.size() - 1);
+      while (w[expect] == 0 && expect > 0) --expect;
+      ASSERT_EQ(d.sample(u), expect) << "n " << n << " u " << u;
+    }
+  }
+  EXPECT_EQ(Distribution1D(std::vector<float>{0, 0}).sample(0.5f), 0u);  // empty: in bounds
 }
 
 TEST(DistributionTest, EmptyOrNonFiniteWeightsAreSafe) {
