@@ -1,5 +1,7 @@
 #include "core/gradient/follow_base.h"
 
+#include <cmath>
+
 #include "core/gradient/half_vector_copy.h"
 #include "core/math/sampling.h"
 
@@ -58,12 +60,15 @@ bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const 
 }
 
 Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& so, const Bsdf& bsdf_o,
-                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters) {
+                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters,
+                            bool same_emitters) {
   if (bsdf_o.is_delta_only()) {
     *ratio = 0.0;  // the offset has no emitter sampling here: only the base generates this pair
     return Rgb(0.0f);
   }
-  EmitterSample eo = scene.sample_emitter_direction(so, v.u_select, v.u_light);
+  const EmitterSample eo = same_emitters && std::isinf(v.es.dist)
+                               ? v.es
+                               : scene.sample_emitter_direction(so, v.u_select, v.u_light);
   if (!(eo.pdf > 0) || !(v.es.pdf > 0)) {
     *ratio = 0.0;
     return Rgb(0.0f);

@@ -28,8 +28,12 @@ bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const 
 // sample (its random numbers), in `scene` (the offset's frame). Returns the
 // offset's contribution f(T x)/p(x); sets *ratio to 0 where the offset cannot
 // generate the technique (delta-only BSDF, zero light pdf), else leaves it.
+// `same_emitters`: `scene` has the base's emitters (a spatial shift), so a
+// sample of an infinitely distant emitter (environment, directional light),
+// which does not depend on the shading point, is the base's and is reused.
 Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& so, const Bsdf& bsdf_o,
-                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters);
+                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters,
+                            bool same_emitters);
 
 // Emission of `hit` seen from `from` along a bounce with (solid-angle) pdf
 // `pdf`, MIS-weighted against emitter sampling from `from` (1 after a Dirac bounce).

@@ -88,7 +88,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
         }
       } else {
         if (rec && !bsdf_o.is_delta_only()) rec->es = scene_.sample_emitter_direction(so, v.u_select, v.u_light);
-        c_o = offset_emitter_sampling(scene_, so, bsdf_o, v, beta, &r, counters_);
+        c_o = offset_emitter_sampling(scene_, so, bsdf_o, v, beta, &r, counters_, /* same_emitters = */ true);
       }
       technique(v.nee, c_o, r);
     }

@@ -104,7 +104,7 @@ ShiftResult TemporalShift::run(Vec2f film) {
     // ---- Emitter sampling at y_k with the base's light sample, in frame t' ----
     if (v.has_nee) {
       double r = ratio;
-      const Rgb c_o = offset_emitter_sampling(other_, so, bsdf_o, v, beta, &r, counters_);
+      const Rgb c_o = offset_emitter_sampling(other_, so, bsdf_o, v, beta, &r, counters_, /* same_emitters = */ false);
       acc_.technique(v.nee, c_o, r);
     }
     if (v.next == PathNext::kEnd || v.next == PathNext::kKilled) break;

@@ -20,6 +20,8 @@ Distribution1D::Distribution1D(std::vector<float> weights) {
     cdf_.clear();
     return;
   }
+  pmf_.resize(weights_.size());
+  for (size_t k = 0; k < weights_.size(); ++k) pmf_[k] = float(weights_[k] / total_);
   const size_t g = cdf_.size();
   guide_.resize(g);
   size_t i = 0;

@@ -18,12 +18,13 @@ class Distribution1D {
   bool empty() const { return cdf_.empty() || total_ <= 0; }
   size_t size() const { return weights_.size(); }
   double total() const { return total_; }
-  float pmf(size_t i) const { return float(weights_[i] / total_); }
+  float pmf(size_t i) const { return pmf_[i]; }
   // Samples an index; `u_remapped` (optional) receives u rescaled to [0,1) within the bin.
   size_t sample(float u, float* u_remapped = nullptr) const;
 
  private:
   std::vector<double> weights_, cdf_;  // double: long lists of tiny triangles
+  std::vector<float> pmf_;             // weights_ / total_, precomputed (no division per sample)
   // Cutpoints (Chen & Asau 1974): guide_[k] is the first bin whose cdf exceeds
   // k/G of the total, so a sample starts its search there and moves a step or
   // two, instead of a binary search over the whole cdf (a 1024-column

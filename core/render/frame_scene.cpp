@@ -30,7 +30,8 @@ Rgb envmap_lookup(const Image& img, Vec2f uv) {
   int x0 = std::clamp(int(std::floor(x)), 0, w), y0 = std::clamp(int(std::floor(y)), 0, h - 1);
   float fx = std::clamp(x - float(x0), 0.0f, 1.0f), fy = std::clamp(y - float(y0), 0.0f, 1.0f);
   int x1 = x0 + 1, y1 = std::min(y0 + 1, h - 1);
-  auto at = [&](int xi, int yi) { return img.rgb(xi % w, yi); };
+  // Periodic in u: x0 ∈ [0, w], x1 ∈ [1, w + 1] (a compare, not a division).
+  auto at = [&](int xi, int yi) { return img.rgb(xi >= w ? xi - w : xi, yi); };
   return (at(x0, y0) * (1 - fx) + at(x1, y0) * fx) * (1 - fy) + (at(x0, y1) * (1 - fx) + at(x1, y1) * fx) * fy;
 }
 
@@ -140,6 +141,7 @@ Status FrameScene::prepare_emitters() {
       }
       envmaps_[e].image = em.envmap;
       envmaps_[e].distribution = Distribution2D(weights, w, h);
+      envmaps_[e].to_local = em.to_world.inverse();
     }
     if (em.type == EmitterType::kArea) {
       if (em.shape < 0 || size_t(em.shape) >= shapes_.size())
@@ -381,15 +383,17 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
       es.d = normalize(em.to_world.vector(local));
       es.dist = kInfinity;
       es.pdf = pdf_uv / (2.0f * kPi * kPi * sin_theta) * select_pdf;
-      es.weight = eval_envmap(em, es.d) / es.pdf;
+      // The radiance at the sampled uv itself (no round trip through the
+      // direction: two inverse trigonometric functions fewer).
+      es.weight = envmap_lookup(*em.envmap, uv) * em.scale / es.pdf;
       return es;
     }
   }
   return es;
 }
 
-Rgb FrameScene::eval_envmap(const Emitter& em, Vec3f d) const {
-  Vec3f local = normalize(em.to_world.inverse().vector(d));
+Rgb FrameScene::eval_envmap(const Emitter& em, const Envmap& env, Vec3f d) const {
+  Vec3f local = normalize(env.to_local.vector(d));
   return envmap_lookup(*em.envmap, direction_to_uv(local)) * em.scale;
 }
 
@@ -420,7 +424,7 @@ float FrameScene::pdf_environment_direction(Vec3f d) const {
   float select_pdf = 1.0f / float(scene_.emitters.size());
   if (em.type == EmitterType::kConstant) return kInvFourPi * select_pdf;
   const Envmap& env = envmaps_[size_t(environment_)];
-  Vec3f local = normalize(em.to_world.inverse().vector(d));
+  Vec3f local = normalize(env.to_local.vector(d));
   float sin_theta = std::sqrt(std::max(local.x * local.x + local.z * local.z, 1e-14f));
   return env.distribution.pdf(direction_to_uv(local)) / (2.0f * kPi * kPi * sin_theta) * select_pdf;
 }
@@ -435,7 +439,7 @@ Rgb FrameScene::eval_environment(Vec3f d) const {
   if (environment_ < 0) return Rgb(0.0f);
   const Emitter& em = scene_.emitters[size_t(environment_)];
   if (em.type == EmitterType::kConstant) return em.radiance;
-  return eval_envmap(em, d);
+  return eval_envmap(em, envmaps_[size_t(environment_)], d);
 }
 
 }  // namespace gdvr

@@ -78,6 +78,7 @@ class FrameScene {
   struct Envmap {
     std::shared_ptr<const Image> image;
     Distribution2D distribution;
+    Transform to_local;  // world -> the envmap's frame (to_world⁻¹, computed once)
   };
 
   FrameScene() = default;
@@ -85,7 +86,7 @@ class FrameScene {
   Status prepare_emitters();
   Vec3f shading_normal(const ShapeState& s, const Shape& shape, uint32_t tri, float b1, float b2, Vec3f face_n) const;
   float pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const;
-  Rgb eval_envmap(const Emitter& e, Vec3f d) const;
+  Rgb eval_envmap(const Emitter& e, const Envmap& env, Vec3f d) const;
 
   Scene scene_;
   std::unique_ptr<Accelerator> accel_;
