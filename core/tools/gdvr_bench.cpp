@@ -26,6 +26,7 @@
 #include "core/render/pt_integrator.h"
 #include "core/render/tile_scheduler.h"
 #include "core/scene/mitsuba_loader.h"
+#include "core/util/memory_tuning.h"
 
 namespace {
 
@@ -59,6 +60,7 @@ std::vector<RecordedRay> record_rays(const FrameScene& scene, const FrameRenderS
 }  // namespace
 
 int main(int argc, char** argv) {
+  gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   if (argc < 2) {
     std::fprintf(stderr, "usage: gdvr-bench SCENE.xml [--spp N] [--threads N] [--runs N] [--param NAME=VALUE ...]\n");
     return 2;

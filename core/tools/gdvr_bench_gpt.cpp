@@ -25,6 +25,7 @@
 #include "core/recon/predicted_improvement.h"
 #include "core/recon/reconstruct.h"
 #include "core/scene/mitsuba_loader.h"
+#include "core/util/memory_tuning.h"
 
 namespace {
 
@@ -230,6 +231,7 @@ void run_quality(const Args& a, const BenchScene& bs, Loaded& l) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   Args a;
   for (int i = 1; i < argc; ++i) {
     std::string s = argv[i];

@@ -22,6 +22,7 @@
 
 #include "core/recon/reconstruct.h"
 #include "core/recon/sliding_window.h"
+#include "core/util/memory_tuning.h"
 
 namespace {
 
@@ -113,6 +114,7 @@ void bench(const char* label, const GradientWindow& w, ReconSettings s, ReconMet
 }  // namespace
 
 int main(int argc, char** argv) {
+  gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   Args a;
   for (int i = 1; i < argc; ++i) {
     const std::string k = argv[i];

@@ -35,6 +35,7 @@
 #include "core/temporal/stream_schedule.h"
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/temporal_window.h"
+#include "core/util/memory_tuning.h"
 
 namespace {
 
@@ -379,6 +380,7 @@ int recon(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress lines show while it runs
   Args a;
   for (int i = 1; i < argc; ++i) {

@@ -45,6 +45,7 @@
 #include "core/job/job_runner.h"
 #include "core/job/job_spec.h"
 #include "core/tools/cli_args.h"
+#include "core/util/memory_tuning.h"
 
 namespace gdvr {
 namespace {
@@ -599,6 +600,7 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
 }  // namespace gdvr
 
 int main(int argc, char** argv) {
+  gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   using namespace gdvr;
   if (argc < 2) return usage(nullptr);
   const std::string verb = argv[1];

@@ -23,6 +23,7 @@
 #include "core/temporal/tgpt_settings.h"
 #include "core/job/job_spec.h"
 #include "core/tools/cli_args.h"
+#include "core/util/memory_tuning.h"
 
 namespace {
 
@@ -52,6 +53,7 @@ std::string frame_name(int frame) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   using namespace gdvr;
   namespace fs = std::filesystem;
   if (argc < 2) return usage(nullptr);

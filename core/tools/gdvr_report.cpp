@@ -19,6 +19,7 @@
 #include "core/io/color_transform.h"
 #include "core/report/error_time_report.h"
 #include "core/tools/cli_args.h"
+#include "core/util/memory_tuning.h"
 
 namespace {
 
@@ -65,6 +66,7 @@ std::string find_shipped_ocio_config() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   using namespace gdvr;
   if (argc < 2) return usage(nullptr);
   std::string input;
