@@ -12,8 +12,7 @@ namespace {
 // of the path, not the random number that chose it, so try the base's u_lobe
 // first and then both ends of the selection interval (lobe selection is a
 // threshold on u_lobe for every BSDF here).
-bool sample_dirac_lobe(const Bsdf& bsdf, const SurfaceInteraction& si, uint32_t lobe, float u_lobe,
-                       BsdfSample* out) {
+bool sample_dirac_lobe(const Bsdf& bsdf, const SurfaceInteraction& si, uint32_t lobe, float u_lobe, BsdfSample* out) {
   for (float u : {u_lobe, 0.0f, 0.99999994f, 0.5f}) {
     BsdfSample s;
     if (bsdf_sample(bsdf, si.uv, si.wi, u, Vec2f(0.5f, 0.5f), &s) && s.lobe == lobe && !s.weight.is_black() &&
@@ -27,8 +26,8 @@ bool sample_dirac_lobe(const Bsdf& bsdf, const SurfaceInteraction& si, uint32_t 
 
 }  // namespace
 
-bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const PathVertex& v, bool replay,
-                        float inv_q, Rgb* beta, double* ratio, FollowedBounce* out) {
+bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const PathVertex& v, bool replay, float inv_q,
+                        Rgb* beta, double* ratio, FollowedBounce* out) {
   if (replay) {
     // Replay: same random numbers; in path space the Jacobian is p_b/p_o, so the ratio stays 1.
     BsdfSample s;
@@ -60,15 +59,13 @@ bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const 
 }
 
 Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& so, const Bsdf& bsdf_o,
-                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters,
-                            bool same_emitters) {
+                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters, bool same_emitters) {
   if (bsdf_o.is_delta_only()) {
     *ratio = 0.0;  // the offset has no emitter sampling here: only the base generates this pair
     return Rgb(0.0f);
   }
-  const EmitterSample eo = same_emitters && std::isinf(v.es.dist)
-                               ? v.es
-                               : scene.sample_emitter_direction(so, v.u_select, v.u_light);
+  const EmitterSample eo =
+      same_emitters && std::isinf(v.es.dist) ? v.es : scene.sample_emitter_direction(so, v.u_select, v.u_light);
   if (!(eo.pdf > 0) || !(v.es.pdf > 0)) {
     *ratio = 0.0;
     return Rgb(0.0f);

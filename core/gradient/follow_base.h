@@ -11,8 +11,8 @@
 namespace gdvr {
 
 struct FollowedBounce {
-  Vec3f wi;           // the offset's new direction (its local shading frame)
-  float pdf = 0;      // the offset's own pdf of it (solid angle; Dirac: lobe probability)
+  Vec3f wi;       // the offset's new direction (its local shading frame)
+  float pdf = 0;  // the offset's own pdf of it (solid angle; Dirac: lobe probability)
   bool delta = false;
   BsdfSample sample;  // the bounce as a BsdfSample (for offset records)
 };
@@ -21,8 +21,8 @@ struct FollowedBounce {
 // Multiplies *beta by the offset's f/p in the base's measure (Jacobian and
 // 1/rr_q included) and *ratio by p(T x)|J|/p(x) of the bounce. False: the
 // shift fails here (no such lobe, degenerate half vector, TIR, zero pdf).
-bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const PathVertex& v, bool replay,
-                        float inv_q, Rgb* beta, double* ratio, FollowedBounce* out);
+bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const PathVertex& v, bool replay, float inv_q,
+                        Rgb* beta, double* ratio, FollowedBounce* out);
 
 // Emitter sampling at the offset vertex `so` with the base vertex's light
 // sample (its random numbers), in `scene` (the offset's frame). Returns the
@@ -32,8 +32,7 @@ bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const 
 // sample of an infinitely distant emitter (environment, directional light),
 // which does not depend on the shading point, is the base's and is reused.
 Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& so, const Bsdf& bsdf_o,
-                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters,
-                            bool same_emitters);
+                            const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters, bool same_emitters);
 
 // Emission of `hit` seen from `from` along a bounce with (solid-angle) pdf
 // `pdf`, MIS-weighted against emitter sampling from `from` (1 after a Dirac bounce).

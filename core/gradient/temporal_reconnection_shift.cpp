@@ -12,8 +12,14 @@ class TemporalShift {
  public:
   TemporalShift(const FrameScene& scene, const GptSettings& settings, const PathRecord& base,
                 const TemporalShiftTarget& target, PathCounters& counters, ShiftTrace* trace)
-      : desc_(scene.scene()), other_(*target.scene), camera_(*target.camera), motion_(*target.motion),
-        settings_(settings), base_(base), counters_(counters), trace_(trace),
+      : desc_(scene.scene()),
+        other_(*target.scene),
+        camera_(*target.camera),
+        motion_(*target.motion),
+        settings_(settings),
+        base_(base),
+        counters_(counters),
+        trace_(trace),
         acc_(base, settings.mis_epsilon, trace ? &trace->ratios : nullptr) {}
 
   ShiftResult run(Vec2f film);
@@ -147,9 +153,9 @@ ShiftResult TemporalShift::run(Vec2f film) {
     // ---- To the base's next vertex, carried: the reconnection, then every later segment ----
     // y_k is the base's own vertex: carried without moving, or traced to
     // exactly the base's point (a static camera sees the same first hit).
-    const bool at_base_vertex = !motion_.moves(v.si.shape) &&
-                                (carried || (so.shape == v.si.shape && so.p.x == v.si.p.x && so.p.y == v.si.p.y &&
-                                             so.p.z == v.si.p.z));
+    const bool at_base_vertex =
+        !motion_.moves(v.si.shape) &&
+        (carried || (so.shape == v.si.shape && so.p.x == v.si.p.x && so.p.y == v.si.p.y && so.p.z == v.si.p.z));
     // ... entered along the base's incoming direction, carried by its motion.
     const bool entered_rigidly =
         carried ? rigid_in : at_base_vertex && so.wi.x == v.si.wi.x && so.wi.y == v.si.wi.y && so.wi.z == v.si.wi.z;
@@ -195,7 +201,7 @@ ShiftResult TemporalShift::run(Vec2f film) {
     if (rigid) {
       beta *= v.bs.weight * inv_q;
       if (motion_.moves(y.shape)) y.wi = y.sh_frame.to_local(-dir);  // else y = x_{k+1} exactly, wi included
-      c_o = beta * nv->le * nv->w_emit;  // same emission, same MIS weight
+      c_o = beta * nv->le * nv->w_emit;                              // same emission, same MIS weight
       if (rec) {
         rec->bs = v.bs, rec->escape_dir = dir;
         if (motion_.moves(v.si.shape)) rec->bs.wi = so.sh_frame.to_local(dir);
@@ -218,7 +224,8 @@ ShiftResult TemporalShift::run(Vec2f film) {
       // epsilon, 0.05 units at a scale of 500), which tilts a short segment
       // by a few 1e-3 rad and would put |w + w' − 1| at ~1e-2. The
       // contribution keeps the sampled pdf, the base estimator's own.
-      const float pdf_b = bsdf_eval_pdf(bsdf_b, v.si.uv, v.si.wi, v.si.sh_frame.to_local(d_base / std::sqrt(dist2_base))).pdf;
+      const float pdf_b =
+          bsdf_eval_pdf(bsdf_b, v.si.uv, v.si.wi, v.si.sh_frame.to_local(d_base / std::sqrt(dist2_base))).pdf;
       if (!(pdf_b > 0)) return fail(i);
       ratio *= double(be.pdf) * double(jacobian) / double(pdf_b);
       y.wi = y.sh_frame.to_local(-dir);

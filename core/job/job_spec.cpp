@@ -193,6 +193,12 @@ Status parse_keyframe(const JsonReader& r, const json& j, const std::string& pat
     }
     key->to_world = t;
   }
+  // Every form must pass the test the 'matrix' form gets (finite, not
+  // numerically singular), or job_to_json would print a key that does not
+  // parse again (found by fuzz_job_spec: "scale": [1.1e20, 1, 1]).
+  Transform check;
+  if (!Transform::from_matrix(key->to_world.matrix(), &check))
+    return r.error(path, "the transform is singular, not finite or too ill-conditioned (scales differing by more than 1e14)");
   return Status::Ok();
 }
 

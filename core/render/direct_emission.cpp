@@ -55,8 +55,8 @@ class ProbeGrid {
 
 Status DirectEmissionSettings::validate() const {
   if (strata < 0 || edge_strata > 64 || (strata > 0 && edge_strata < strata))
-    return invalid_argument("direct light: need 0 <= strata <= edge_strata <= 64 (got strata " + std::to_string(strata) +
-                            ", edge_strata " + std::to_string(edge_strata) + ")");
+    return invalid_argument("direct light: need 0 <= strata <= edge_strata <= 64 (got strata " +
+                            std::to_string(strata) + ", edge_strata " + std::to_string(edge_strata) + ")");
   return Status::Ok();
 }
 
@@ -69,9 +69,8 @@ Rgb first_hit_emission(const FrameScene& scene, const Ray& camera_ray) {
 
 Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, const PerspectiveCamera& camera,
                                                       int width, int height, const DirectEmissionSettings& settings,
-                                                      uint64_t seed, uint32_t stream,
-                                                      const PathTracerSettings& path, int threads,
-                                                      const std::atomic<bool>* cancel) {
+                                                      uint64_t seed, uint32_t stream, const PathTracerSettings& path,
+                                                      int threads, const std::atomic<bool>* cancel) {
   if (width <= 0 || height <= 0) return invalid_argument("direct emission: resolution must be positive");
   GDVR_RETURN_IF_ERROR(settings.validate());
   if (!settings.enabled()) return invalid_argument("direct emission: strata must be at least 1");
@@ -116,7 +115,8 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
         for (int j = 0; j < k; ++j)
           for (int i = 0; i < k; ++i) {
             const Vec2f u = sampler.next_2d();
-            const Ray ray = camera.generate_ray({float(x) + (float(i) + u.x) * inv_k, float(y) + (float(j) + u.y) * inv_k});
+            const Ray ray =
+                camera.generate_ray({float(x) + (float(i) + u.x) * inv_k, float(y) + (float(j) + u.y) * inv_k});
             const Rgb e = first_hit_emission(scene, ray);
             ++tile_rays;
             if (!is_finite(e)) {

@@ -54,7 +54,7 @@ inline DirectEmissionSettings default_direct_emission(bool gradient_domain) {
 }
 
 struct DirectEmissionResult {
-  Image direct;       // RGB mean emission over the pixel
+  Image direct;                  // RGB mean emission over the pixel
   uint64_t rays = 0;             // camera rays traced (k² per pixel)
   uint64_t invalid_samples = 0;  // non-finite emission dropped (counted, never silent)
   uint64_t edge_pixels = 0;      // pixels sampled with edge_strata
@@ -68,9 +68,8 @@ constexpr uint32_t kDirectEmissionStream = 0;
 // set before the last tile.
 Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, const PerspectiveCamera& camera,
                                                       int width, int height, const DirectEmissionSettings& settings,
-                                                      uint64_t seed, uint32_t stream,
-                                                      const PathTracerSettings& path, int threads,
-                                                      const std::atomic<bool>* cancel);
+                                                      uint64_t seed, uint32_t stream, const PathTracerSettings& path,
+                                                      int threads, const std::atomic<bool>* cancel);
 
 // The first-hit emission of one camera ray, exactly as trace_path counts it
 // at depth 0 (environment on a miss, the area emitter of the hit shape).

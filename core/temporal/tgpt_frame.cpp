@@ -4,7 +4,6 @@
 #include <chrono>
 #include <memory>
 
-
 namespace gdvr {
 namespace {
 
@@ -63,11 +62,13 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
   const bool reconnect = settings.temporal_shift == TemporalShiftMapping::kReconnect;
   TemporalTarget backward, forward;
   if (reconnect && nb.prev && nb.to_prev.any()) {
-    if (!nb.prev_scene) return failed_precondition("render_tgpt_frame: temporal_shift reconnect needs the previous frame's scene");
+    if (!nb.prev_scene)
+      return failed_precondition("render_tgpt_frame: temporal_shift reconnect needs the previous frame's scene");
     backward = TemporalTarget(*nb.prev_scene, *nb.at_t, *nb.prev, render.width, render.height);
   }
   if (reconnect && nb.next && nb.to_next.any()) {
-    if (!nb.next_scene) return failed_precondition("render_tgpt_frame: temporal_shift reconnect needs the next frame's scene");
+    if (!nb.next_scene)
+      return failed_precondition("render_tgpt_frame: temporal_shift reconnect needs the next frame's scene");
     forward = TemporalTarget(*nb.next_scene, *nb.at_t, *nb.next, render.width, render.height);
   }
 

@@ -56,7 +56,8 @@ std::unique_ptr<TwoFrames> two_frames(const TemporalShiftCase& c, bool identical
     const float size = max_component(hi - lo);
     Shape& moving = f->at_other.shapes[size_t(c.moving_shape)];
     moving.to_world = Transform::translate(Vec3f(0.02f * size, 0, 0.01f * size)) * moving.to_world;
-    f->at_other.camera.to_world = Transform::translate(Vec3f(0.003f * size, 0.002f * size, 0)) * f->at_other.camera.to_world;
+    f->at_other.camera.to_world =
+        Transform::translate(Vec3f(0.003f * size, 0.002f * size, 0)) * f->at_other.camera.to_world;
   }
   auto a = FrameScene::create(f->at_t, animated);
   auto b = FrameScene::create(f->at_other, animated);
@@ -161,11 +162,12 @@ TEST_P(TemporalShiftTest, ShiftingBackRecoversTheBasePathAndWeightsSumToOne) {
       worst_position = std::max(worst_position, double(length(d) / scale));
     }
   });
-  std::printf("[ temporal invertibility ] %s thr %.3g: %d pairs checked (%d vertices on the moving shape), %d forward "
-              "failures, %d backward failures, %d techniques (%d with |w+w'-1| > 1e-3), worst |w+w'-1| %.2e, worst relative "
-              "position error %.2e\n",
-              GetParam().scene, GetParam().diffuse_roughness, checked, moved, failed, back_failed, techniques,
-              off_by_1e3, worst_weight_sum, worst_position);
+  std::printf(
+      "[ temporal invertibility ] %s thr %.3g: %d pairs checked (%d vertices on the moving shape), %d forward "
+      "failures, %d backward failures, %d techniques (%d with |w+w'-1| > 1e-3), worst |w+w'-1| %.2e, worst relative "
+      "position error %.2e\n",
+      GetParam().scene, GetParam().diffuse_roughness, checked, moved, failed, back_failed, techniques, off_by_1e3,
+      worst_weight_sum, worst_position);
   EXPECT_GT(checked, 200);
   EXPECT_GT(moved, 0) << "the test needs paths through the moving shape";
   EXPECT_LE(back_failed, checked / 50);
@@ -178,16 +180,14 @@ TEST_P(TemporalShiftTest, ShiftingBackRecoversTheBasePathAndWeightsSumToOne) {
 
 // Shape indices: cbox's small box (diffuse), a veach-mis plate, a matpreview
 // object (glossy, under an environment).
-INSTANTIATE_TEST_SUITE_P(Scenes, TemporalShiftTest,
-                         ::testing::Values(TemporalShiftCase{"cbox", 0.001f, 7},
-                                           TemporalShiftCase{"veach-mis", 0.001f, 1},
-                                           TemporalShiftCase{"veach-mis", 10.0f, 1},
-                                           TemporalShiftCase{"matpreview", 0.001f, 2}),
-                         [](const auto& info) {
-                           return std::string(info.param.scene == std::string("veach-mis") ? "veach_mis"
-                                                                                          : info.param.scene) +
-                                  (info.param.diffuse_roughness > 1 ? "_all_glossy" : "");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Scenes, TemporalShiftTest,
+    ::testing::Values(TemporalShiftCase{"cbox", 0.001f, 7}, TemporalShiftCase{"veach-mis", 0.001f, 1},
+                      TemporalShiftCase{"veach-mis", 10.0f, 1}, TemporalShiftCase{"matpreview", 0.001f, 2}),
+    [](const auto& info) {
+      return std::string(info.param.scene == std::string("veach-mis") ? "veach_mis" : info.param.scene) +
+             (info.param.diffuse_roughness > 1 ? "_all_glossy" : "");
+    });
 
 }  // namespace
 }  // namespace gdvr

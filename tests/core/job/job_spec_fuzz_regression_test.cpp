@@ -23,6 +23,25 @@ TEST(JobSpecFuzzRegressionTest, NumberOverflowIsAnInvalidJsonError) {
   }
 }
 
+// A keyframe's translate/rotate/scale (or lookat) whose matrix the 'matrix'
+// form would reject (here a scale of 1.1e20 next to 1: condition 1e20) parsed,
+// and job_to_json then printed a job that did not parse again. Every form now
+// passes the same test; what parses prints to JSON that parses.
+TEST(JobSpecFuzzRegressionTest, IllConditionedKeyIsRejectedInEveryForm) {
+  const std::string key_scale =
+      R"({"scene": "a.xml", "tracks": [{"target": "box", "keys": [{"frame": 0, "scale": [111111111111111111111, 1, 1]}]}]})";
+  auto job = parse_job_json(key_scale, "scale.json");
+  ASSERT_FALSE(job.ok());
+  EXPECT_NE(job.status().message().find("job.tracks[0].keys[0]"), std::string::npos) << job.status().message();
+  EXPECT_NE(job.status().message().find("ill-conditioned"), std::string::npos) << job.status().message();
+  // A large but well-conditioned scale still parses and round-trips.
+  auto fine = parse_job_json(
+      R"({"scene": "a.xml", "tracks": [{"target": "box", "keys": [{"frame": 0, "scale": [1e6, 1e6, 1e6]}]}]})", "fine.json");
+  ASSERT_TRUE(fine.ok()) << fine.status().to_string();
+  auto again = parse_job_json(job_to_json(*fine), "again.json");
+  EXPECT_TRUE(again.ok()) << again.status().to_string();
+}
+
 // The glTF finding's sibling in the job runner (found by reading, not by a
 // fuzz target): a scene name too long for a path made
 // std::filesystem::weakly_canonical / exists throw out of validate_job and

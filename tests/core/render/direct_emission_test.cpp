@@ -150,8 +150,10 @@ TEST(DirectEmissionTest, RejectsBadStrata) {
   auto ts = load_test_scene("cbox", kSize, kSize);
   ASSERT_TRUE(ts);
   PerspectiveCamera camera(ts->desc.camera, kSize, kSize);
-  EXPECT_FALSE(render_direct_emission(*ts->scene, camera, kSize, kSize, {0, 4}, 1, 0, ts->render.path, 1, nullptr).ok());
-  EXPECT_FALSE(render_direct_emission(*ts->scene, camera, kSize, kSize, {8, 4}, 1, 0, ts->render.path, 1, nullptr).ok());
+  EXPECT_FALSE(
+      render_direct_emission(*ts->scene, camera, kSize, kSize, {0, 4}, 1, 0, ts->render.path, 1, nullptr).ok());
+  EXPECT_FALSE(
+      render_direct_emission(*ts->scene, camera, kSize, kSize, {8, 4}, 1, 0, ts->render.path, 1, nullptr).ok());
 }
 
 }  // namespace
