@@ -45,6 +45,12 @@ struct PreparedJob {
   TgptSettings tgpt_settings;
 };
 
+// The job's per-term weights (primal, dx, dy, dt, dxdt, dydt), when given.
+void apply_term_weights(const ReconstructionSpec& spec, ReconSettings* recon) {
+  if (spec.term_weights.size() != size_t(kTermCount)) return;
+  for (int t = 0; t < kTermCount; ++t) recon->term_weights[size_t(t)] = spec.term_weights[size_t(t)];
+}
+
 // T-GPT options from the job (stage 1 and stage 2 both build them, so a farm's
 // finalize process needs only the job and the buffers).
 Expected<TgptSettings> tgpt_settings_for(const JobSpec& job) {
@@ -59,6 +65,7 @@ Expected<TgptSettings> tgpt_settings_for(const JobSpec& job) {
   s.temporal_shift = temporal_shift.value();
   s.recon.method = method.value();
   s.recon.alpha = job.reconstruction.alpha;
+  apply_term_weights(job.reconstruction, &s.recon);
   s.window = job.reconstruction.window;
   if (s.window < 1)
     return invalid_argument("job.reconstruction.window must be at least 1 (got " + std::to_string(s.window) + ")");
@@ -143,6 +150,7 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
     prepared.gpt_settings = GptSettings::defaults_for(shift.value());
     prepared.gpt_settings.recon.method = method.value();
     prepared.gpt_settings.recon.alpha = job.reconstruction.alpha;
+    apply_term_weights(job.reconstruction, &prepared.gpt_settings.recon);
     GDVR_RETURN_IF_ERROR(prepared.gpt_settings.validate().with_context("job: "));
   }
   if (job.integrator == "tgpt") {
@@ -513,6 +521,7 @@ Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::m
   ReconSettings recon = GptSettings::defaults_for(ShiftMapping::kReconnect).recon;
   recon.method = method.value();
   recon.alpha = job.reconstruction.alpha;
+  apply_term_weights(job.reconstruction, &recon);
   auto layer = [&](const char* name) -> const Image* {
     const ImageLayer* l = fb.layers.find(name);
     return l ? &l->image : nullptr;

@@ -335,11 +335,19 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   if (j.contains("reconstruction")) {
     const json& rj = j["reconstruction"];
     std::string rp = p + ".reconstruction";
-    GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"method", "alpha", "window"}));
+    GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"method", "alpha", "window", "term_weights"}));
     ReconstructionSpec& rs = job.reconstruction;
     GDVR_RETURN_IF_ERROR(r.opt(rj, "method", rp, &rs.method));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "alpha", rp, &rs.alpha));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "window", rp, &rs.window));
+    if (rj.contains("term_weights") && !rj["term_weights"].is_null() &&
+        !(rj["term_weights"].is_array() && rj["term_weights"].empty())) {  // protobuf JSON: [] or absent = unset
+      GDVR_RETURN_IF_ERROR(r.get_vec(rj["term_weights"], rp + ".term_weights", 6, &rs.term_weights));
+      for (size_t k = 0; k < rs.term_weights.size(); ++k)
+        if (!(rs.term_weights[k] >= 0) || !std::isfinite(rs.term_weights[k]) || rs.term_weights[k] > 1e6)
+          return r.error(rp + ".term_weights[" + std::to_string(k) + "]", "must be in [0, 1e6]");
+      if (rs.term_weights[0] == 0) return r.error(rp + ".term_weights[0]", "the primal's weight must be positive");
+    }
     if (rs.method != "l1" && rs.method != "l2" && rs.method != "uniform" && rs.method != "weighted" && rs.method != "none")
       return r.error(rp + ".method", "must be l1, l2, uniform, weighted or none, not '" + rs.method + "'");
     if (!(rs.alpha >= 0)) return r.error(rp + ".alpha", "must be >= 0");
@@ -416,6 +424,7 @@ std::string job_to_json(const JobSpec& job) {
   j["reconstruction"] = {{"method", job.reconstruction.method},
                          {"alpha", job.reconstruction.alpha},
                          {"window", job.reconstruction.window}};
+  if (!job.reconstruction.term_weights.empty()) j["reconstruction"]["term_weights"] = job.reconstruction.term_weights;
   j["direct_light"] = json::object();
   if (job.direct_light.strata >= 0) j["direct_light"]["strata"] = job.direct_light.strata;
   if (job.direct_light.edge_strata >= 0) j["direct_light"]["edge_strata"] = job.direct_light.edge_strata;

@@ -18,6 +18,9 @@ struct ReconstructionSpec {
   std::string method = "l1";  // l1 | l2 | uniform | weighted | none
   double alpha = 0.2;
   int window = 20;            // frames in the temporal sliding window
+  // Extra weight per term (primal, dx, dy, dt, dxdt, dydt); empty = all 1.
+  // 0 drops a term (e.g. {1, 1, 1, 0, 0, 0}: a window without temporal terms).
+  std::vector<double> term_weights;
 };
 
 // Emitters seen directly (core/render/direct_emission.h); -1 = the

@@ -49,7 +49,7 @@ TEST(JobSpecTest, ParsesEveryField) {
   auto job = parse_job_json(R"({
     "scene": "cbox/cbox-rgb.xml", "frames": "1-10x2", "fps": 30, "width": 320, "height": 240, "spp": 16,
     "time_budget_s": 2.5, "seed": "18446744073709551615", "integrator": "gpt", "shift": "hybrid",
-    "reconstruction": {"method": "l2", "alpha": 0.5, "window": 5},
+    "reconstruction": {"method": "l2", "alpha": 0.5, "window": 5, "term_weights": [1, 1, 1, 2, 0.5, 0.5]},
     "params": {"spp": "8", "res": 64},
     "tracks": [{"target": "sensor", "interpolation": "cubic", "keys": [
       {"frame": 0, "lookat": {"origin": [0, 0, -5], "target": [0, 0, 0], "up": [0, 1, 0]}},
@@ -64,6 +64,8 @@ TEST(JobSpecTest, ParsesEveryField) {
   EXPECT_EQ(job->seed, 18446744073709551615ull);
   EXPECT_EQ(job->integrator, "gpt");
   EXPECT_EQ(job->reconstruction.window, 5);
+  EXPECT_EQ(job->reconstruction.term_weights, (std::vector<double>{1, 1, 1, 2, 0.5, 0.5}));
+  EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->reconstruction.term_weights, job->reconstruction.term_weights);
   EXPECT_EQ(job->params.at("res"), "64");
   ASSERT_EQ(job->animation.tracks.size(), 1u);
   const Track& t = job->animation.tracks[0];
@@ -137,6 +139,9 @@ TEST(JobSpecTest, TypeAndValueErrorsNameTheField) {
       {R"({"scene": "a.xml", "frames": "5-1"})", "job.frames"},
       {R"({"scene": "a.xml", "integrator": "bdpt"})", "job.integrator"},
       {R"({"scene": "a.xml", "direct_light": {"strata": 65}})", "job.direct_light.strata"},
+      {R"({"scene": "a.xml", "reconstruction": {"term_weights": [1, 1]}})", "job.reconstruction.term_weights"},
+      {R"({"scene": "a.xml", "reconstruction": {"term_weights": [1, 1, 1, -1, 1, 1]}})", "job.reconstruction.term_weights[3]"},
+      {R"({"scene": "a.xml", "reconstruction": {"term_weights": [0, 1, 1, 1, 1, 1]}})", "job.reconstruction.term_weights[0]"},
       {R"({"scene": "a.xml", "direct_light": {"edge_strata": -2}})", "job.direct_light.edge_strata"},
       {R"({"scene": "a.xml", "tracks": [{"target": "s", "interpolation": "spline", "keys": [{"time": 0, "translate": [0,0,0]}]}]})",
        "job.tracks[0].interpolation"},
