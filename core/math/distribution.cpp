@@ -20,6 +20,7 @@ Distribution1D::Distribution1D(std::vector<float> weights) {
     cdf_.clear();
     return;
   }
+  uniform_ = std::all_of(weights_.begin(), weights_.end(), [&](double w) { return w == weights_[0]; });
   pmf_.resize(weights_.size());
   for (size_t k = 0; k < weights_.size(); ++k) pmf_[k] = float(weights_[k] / total_);
   const size_t g = cdf_.size();
@@ -37,11 +38,19 @@ size_t Distribution1D::sample(float u, float* u_remapped) const {
     if (u_remapped) *u_remapped = u;
     return 0;
   }
+  const size_t n = cdf_.size();
+  if (uniform_) {
+    // Equal weights (a quad light's two triangles): the bin is floor(u n), with
+    // no data-dependent search whose branches a random u mispredicts.
+    const double scaled = double(u) * double(n);
+    const size_t i = std::min(n - 1, size_t(scaled));
+    if (u_remapped) *u_remapped = float(std::clamp(scaled - double(i), 0.0, double(0x1.fffffep-1f)));
+    return i;
+  }
   const double target = double(u) * total_;
   // The first bin whose cdf exceeds target (upper_bound), found from the
   // cutpoint; the backward step keeps it exact whatever the rounding of
   // target against the cutpoint thresholds.
-  const size_t n = cdf_.size();
   size_t i = guide_[std::min(n - 1, size_t(double(u) * double(n)))];
   while (i > 0 && cdf_[i - 1] > target) --i;
   while (i + 1 < n && cdf_[i] <= target) ++i;

@@ -31,6 +31,7 @@ class Distribution1D {
   // environment map row: 10 dependent, cache-missing steps).
   std::vector<uint32_t> guide_;
   double total_ = 0;
+  bool uniform_ = false;  // all weights equal: sample() needs no search
 };
 
 // Piecewise-constant 2D distribution on [0,1]^2 from a width x height grid.

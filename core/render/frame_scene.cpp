@@ -265,7 +265,8 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
       const ShapeState& s = shapes_[size_t(em.shape)];
       const Shape& shape = scene_.shapes[size_t(em.shape)];
       Vec3f p, n;
-      float pdf_solid_angle;
+      float pdf_solid_angle = 0.0f;
+      bool area_measure = false;  // p was sampled by area: convert the pdf below
       if (shape.type == ShapeType::kSphere) {
         Vec3f dc = s.center - ref.p;
         float dc2 = length_squared(dc);
@@ -277,29 +278,32 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
           // sphere instead cancels catastrophically in float for a light
           // 1e-3 of its distance across and put points on the far side
           // (back-facing: zero radiance, a -0.2 % bias; docs/stability.md).
-          const double sin2_max = double(s.radius) * double(s.radius) / double(dc2);
-          const double sin_max = std::sqrt(sin2_max);
-          const double one_minus_cos_alpha = cone_one_minus_cos(sin_max);
+          // Written as short, independent dependency chains (the distance's sqrt
+          // and sin^2 of the cone angle start together): this is the hottest
+          // code of scenes lit by small spheres.
+          const double dist_c = std::sqrt(double(dc2));
+          const double radius = double(s.radius);
+          const double inv_sin_max = dist_c / radius;
+          const double one_minus_cos_alpha = cone_one_minus_cos_from_sin2(radius * radius / double(dc2));
           const double one_minus_cos = double(u.y) * one_minus_cos_alpha;
           const double sin2 = one_minus_cos * (2.0 - one_minus_cos);
           const double cos_theta = 1.0 - one_minus_cos;
           // Angle at the centre between the reference point and the sampled point.
-          const double cos_c = sin2 / sin_max + cos_theta * std::sqrt(std::max(0.0, 1.0 - sin2 / sin2_max));
-          const double sin_c = std::sqrt(std::max(0.0, 1.0 - cos_c * cos_c));
-          const double phi = 2.0 * kPi * double(u.x);
-          const Frame frame(dc * (1.0f / std::sqrt(dc2)));  // z towards the centre
-          n = normalize(frame.to_world(
-              Vec3f(float(-sin_c * std::cos(phi)), float(-sin_c * std::sin(phi)), float(-cos_c))));
+          const double sin2_over_sin_max = sin2 * inv_sin_max;
+          const double cos_c =
+              sin2_over_sin_max + cos_theta * std::sqrt(std::max(0.0, 1.0 - sin2_over_sin_max * inv_sin_max));
+          const float sin_c = float(std::sqrt(std::max(0.0, 1.0 - cos_c * cos_c)));
+          // The azimuth needs no double: an error of 1e-7 rad moves the point by 1e-7 radii.
+          const float phi = 2.0f * kPi * u.x;
+          const Frame frame(dc * float(1.0 / dist_c));  // z towards the centre
+          n = normalize(frame.to_world(Vec3f(-sin_c * std::cos(phi), -sin_c * std::sin(phi), float(-cos_c))));
           p = s.center + n * s.radius;
           pdf_solid_angle = uniform_cone_pdf(one_minus_cos_alpha);
         } else {
           // Inside (or on) the sphere: uniform area sampling.
           n = square_to_uniform_sphere(u);
           p = s.center + n * s.radius;
-          Vec3f d = p - ref.p;
-          float dist2 = length_squared(d);
-          float cos_l = std::abs(dot(normalize(d), n));
-          pdf_solid_angle = cos_l > 0 ? dist2 / (s.area * cos_l) : 0.0f;
+          area_measure = true;
         }
         if (shape.flip_normals) n = -n;
       } else {
@@ -314,15 +318,19 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
         n = s.instanced ? normalize(s.to_world.normal(s.face_normals[tri])) * s.handedness : s.face_normals[tri];
         n = shading_normal(s, shape, uint32_t(tri), b.x, b.y, n);
         if (shape.flip_normals) n = -n;
-        Vec3f d = p - ref.p;
-        float dist2 = length_squared(d);
-        float cos_l = std::abs(dot(d, n)) / std::sqrt(dist2);
-        pdf_solid_angle = cos_l > 0 ? dist2 / (s.area * cos_l) : 0.0f;
+        area_measure = true;
       }
       Vec3f d = p - ref.p;
-      float dist = length(d);
+      float dist2 = length_squared(d);
+      float dist = std::sqrt(dist2);
+      if (area_measure) {
+        // Area to solid angle: dist^2 / (area cos_l) with cos_l = |d.n| / dist,
+        // grouped so that no extra division or overflow enters.
+        float abs_dn = std::abs(dot(d, n));
+        pdf_solid_angle = abs_dn > 0 ? dist2 * (dist / (s.area * abs_dn)) : 0.0f;
+      }
       if (!(dist > 0) || !(pdf_solid_angle > 0) || !std::isfinite(pdf_solid_angle)) return es;
-      es.d = d / dist;
+      es.d = d * (1.0f / dist);
       es.dist = dist;
       es.pdf = pdf_solid_angle * select_pdf;
       // One-sided: emits only on the side its normal faces.
@@ -403,7 +411,7 @@ float FrameScene::pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const Su
     Vec3f dc = s.center - ref_p;
     float dc2 = length_squared(dc), r2 = s.radius * s.radius;
     if (dc2 > r2 * (1.0f + 1e-5f)) {
-      return uniform_cone_pdf(cone_one_minus_cos(double(s.radius) / std::sqrt(double(dc2))));
+      return uniform_cone_pdf(cone_one_minus_cos_from_sin2(double(s.radius) * double(s.radius) / double(dc2)));
     }
   }
   Vec3f d = hit.p - ref_p;
