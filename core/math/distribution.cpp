@@ -65,31 +65,29 @@ size_t Distribution1D::sample(float u, float* u_remapped) const {
 
 Distribution2D::Distribution2D(const std::vector<float>& weights, int width, int height)
     : width_(width), height_(height) {
-  std::vector<float> row_sums(height);
-  conditional_.reserve(height);
-  for (int y = 0; y < height; ++y) {
-    std::vector<float> row(weights.begin() + size_t(y) * width, weights.begin() + size_t(y + 1) * width);
-    conditional_.emplace_back(row);
-    row_sums[y] = float(conditional_.back().total());
+  const size_t w = size_t(std::max(width, 0)), h = size_t(std::max(height, 0));
+  if (weights.size() < w * h) return;  // empty
+  std::vector<float> row_sums(h);
+  rows_.reserve(w * h);
+  for (size_t y = 0; y < h; ++y) row_sums[y] = float(build_alias_table(&weights[y * w], w, &rows_));
+  if (!(build_alias_table(row_sums.data(), h, &marginal_) > 0)) {
+    marginal_.clear();
+    rows_.clear();
   }
-  marginal_ = Distribution1D(row_sums);
-  if (marginal_.empty()) conditional_.clear();
 }
 
 Vec2f Distribution2D::sample(Vec2f u, float* pdf) const {
-  float uy, ux;
-  size_t y = marginal_.sample(u.y, &uy);
-  size_t x = conditional_[y].sample(u.x, &ux);
-  *pdf = marginal_.pmf(y) * conditional_[y].pmf(x) * float(width_) * float(height_);
-  return {(float(x) + ux) / float(width_), (float(y) + uy) / float(height_)};
+  const AliasSample y = sample_alias(marginal_.data(), marginal_.size(), u.y);
+  const AliasSample x = sample_alias(&rows_[y.index * size_t(width_)], size_t(width_), u.x);
+  *pdf = y.pmf * x.pmf * float(width_) * float(height_);
+  return {(float(x.index) + x.u_remapped) / float(width_), (float(y.index) + y.u_remapped) / float(height_)};
 }
 
 float Distribution2D::pdf(Vec2f p) const {
   if (empty()) return 0.0f;
-  int x = std::clamp(int(p.x * width_), 0, width_ - 1);
-  int y = std::clamp(int(p.y * height_), 0, height_ - 1);
-  if (conditional_[y].empty()) return 0.0f;
-  return marginal_.pmf(y) * conditional_[y].pmf(x) * float(width_) * float(height_);
+  const size_t x = size_t(std::clamp(int(p.x * width_), 0, width_ - 1));
+  const size_t y = size_t(std::clamp(int(p.y * height_), 0, height_ - 1));
+  return marginal_[y].pmf * rows_[y * size_t(width_) + x].pmf * float(width_) * float(height_);
 }
 
 }  // namespace gdvr

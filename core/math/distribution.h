@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/math/alias_table.h"
 #include "core/math/vec.h"
 
 namespace gdvr {
@@ -34,7 +35,9 @@ class Distribution1D {
   bool uniform_ = false;  // all weights equal: sample() needs no search
 };
 
-// Piecewise-constant 2D distribution on [0,1]^2 from a width x height grid.
+// Piecewise-constant 2D distribution on [0,1]^2 from a width x height grid,
+// sampled through alias tables (alias_table.h): a marginal over rows and one
+// table per row, flattened so that row y's slots start at y * width.
 class Distribution2D {
  public:
   Distribution2D() = default;
@@ -47,8 +50,8 @@ class Distribution2D {
 
  private:
   int width_ = 0, height_ = 0;
-  std::vector<Distribution1D> conditional_;  // one per row
-  Distribution1D marginal_;
+  std::vector<AliasSlot> marginal_;  // empty when no weight is positive
+  std::vector<AliasSlot> rows_;
 };
 
 }  // namespace gdvr
