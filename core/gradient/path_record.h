@@ -55,6 +55,13 @@ struct PathVertex {
   float escape_pdf = 0;   // environment sampling pdf of escape_dir
   float w_escape = 0;
   Rgb escape;             // base contribution
+
+  // The base's solid-angle pdf of x_k -> x_{k+1} evaluated from the recorded
+  // positions, which the spatial reconnection shift needs for its MIS ratio
+  // (< 0: not computed yet). The four offsets of a base path usually reconnect
+  // at the same vertex, so the first computes it and the others reuse it; a
+  // record belongs to one tracer, so the cache is never shared across threads.
+  mutable float reconnect_pdf = -1.0f;
 };
 
 struct PathRecord {

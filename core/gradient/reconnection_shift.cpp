@@ -176,8 +176,11 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
       // from a point offset along the normal).
       float pdf_b = v.bs.pdf;
       if (!escaped) {
-        const Vec3f d_base = nv->si.p - v.si.p;
-        pdf_b = bsdf_eval_pdf(bsdf_b, v.si.uv, v.si.wi, v.si.sh_frame.to_local(normalize(d_base))).pdf;
+        if (v.reconnect_pdf < 0) {
+          const Vec3f d_base = nv->si.p - v.si.p;
+          v.reconnect_pdf = bsdf_eval_pdf(bsdf_b, v.si.uv, v.si.wi, v.si.sh_frame.to_local(normalize(d_base))).pdf;
+        }
+        pdf_b = v.reconnect_pdf;
         if (!(pdf_b > 0)) {
           fail_from(i, false);
           return acc_.result();

@@ -29,11 +29,14 @@ PerspectiveCamera::PerspectiveCamera(const Camera& camera, int width, int height
 
 Ray PerspectiveCamera::generate_ray(Vec2f film) const {
   float sx = film.x * inv_width_, sy = film.y * inv_height_;
-  Vec3f local = normalize(Vec3f((1.0f - 2.0f * sx) * tan_half_x_, (1.0f - 2.0f * sy) * tan_half_y_, 1.0f));
+  // The camera-space direction on the z = 1 plane; normalised only once, in
+  // world space (to_world may scale). Its camera-space length is 1 / cos of
+  // the angle to the axis: the distance to the clip planes along the ray.
+  const Vec3f local((1.0f - 2.0f * sx) * tan_half_x_, (1.0f - 2.0f * sy) * tan_half_y_, 1.0f);
+  const float inv_z = length(local);
   Ray ray;
   ray.o = origin_;
   ray.d = normalize(to_world_.vector(local));
-  float inv_z = 1.0f / local.z;
   ray.tmin = near_ * inv_z;
   ray.tmax = far_ * inv_z;
   return ray;

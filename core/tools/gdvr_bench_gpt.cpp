@@ -7,7 +7,7 @@
 //   (REFERENCE.md §6) next to the achieved one at equal spp.
 //
 //   gdvr-bench-gpt [--scenes cbox,veach-mis,matpreview] [--runs 3] [--spp 8]
-//                  [--budgets 2,4,8] [--threads 2] [--no-cost] [--no-quality]
+//                  [--budgets 2,4,8] [--threads 2] [--no-cost] [--no-quality] [--default-only]
 //                  [--quality-shift reconnect] [--source-dir DIR]
 // Run from the repository root (or set GDVR_SOURCE_DIR / --source-dir).
 #include <algorithm>
@@ -49,6 +49,7 @@ struct Args {
   int runs = 3, spp = 8, threads = 2;
   std::vector<double> budgets = {2, 4, 8};
   bool cost = true, quality = true;
+  bool default_only = false;  // cost of the default configuration only (reconnect, cached RR on)
   ShiftMapping quality_shift = ShiftMapping::kReconnect;
   std::string source_dir = std::getenv("GDVR_SOURCE_DIR") ? std::getenv("GDVR_SOURCE_DIR") : ".";
 };
@@ -155,9 +156,10 @@ void run_cost(const Args& a, const BenchScene& bs, Loaded& l) {
     ShiftMapping shift;
     bool rr;
   };
-  const std::vector<Config> configs = {{ShiftMapping::kReplay, false},    {ShiftMapping::kReplay, true},
-                                       {ShiftMapping::kReconnect, true},  {ShiftMapping::kReconnect, false},
-                                       {ShiftMapping::kHybrid, true},     {ShiftMapping::kHybrid, false}};
+  const std::vector<Config> all = {{ShiftMapping::kReplay, false},   {ShiftMapping::kReplay, true},
+                                   {ShiftMapping::kReconnect, true}, {ShiftMapping::kReconnect, false},
+                                   {ShiftMapping::kHybrid, true},    {ShiftMapping::kHybrid, false}};
+  const std::vector<Config> configs = a.default_only ? std::vector<Config>{all[2]} : all;
   std::vector<std::vector<double>> ratios(configs.size());
   std::vector<double> pt_times, fail_rates(configs.size());
   for (int run = 0; run < a.runs; ++run) {
@@ -251,6 +253,7 @@ int main(int argc, char** argv) {
       for (const auto& b : split(next())) a.budgets.push_back(std::atof(b.c_str()));
     } else if (s == "--no-cost") a.cost = false;
     else if (s == "--no-quality") a.quality = false;
+    else if (s == "--default-only") a.default_only = true;
     else if (s == "--source-dir") a.source_dir = next();
     else if (s == "--quality-shift") {
       auto m = parse_shift_mapping(next());
