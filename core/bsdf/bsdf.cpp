@@ -92,6 +92,12 @@ float bsdf_lobe_roughness(const Bsdf& bsdf, uint32_t lobe) {
   return bsdf.roughness();
 }
 
+float bsdf_smooth_roughness(const Bsdf& bsdf) {
+  // Smooth plastic is the one BSDF whose Dirac lobe sits next to a smooth one.
+  if (bsdf.type == BsdfType::kPlastic) return std::numeric_limits<float>::infinity();
+  return bsdf.roughness();
+}
+
 BsdfEval bsdf_eval_pdf(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi) {
   mirror_to_front(bsdf, &wo, &wi);
   return eval_pdf_front(bsdf, uv, wo, wi);

@@ -79,6 +79,11 @@ struct Bsdf {
 // Plastic mixes a Dirac and a diffuse lobe, so shifts should classify by lobe.
 float bsdf_lobe_roughness(const Bsdf& bsdf, uint32_t lobe);
 
+// Smallest roughness among the BSDF's non-Dirac lobes (+inf for a diffuse
+// lobe), 0 when it has only Dirac lobes: how rough a vertex is for a direction
+// that was not sampled from a Dirac lobe (smooth plastic: its diffuse base).
+float bsdf_smooth_roughness(const Bsdf& bsdf);
+
 struct BsdfSample {
   Vec3f wi;
   float pdf = 0;         // solid-angle pdf; for Dirac lobes the discrete lobe probability

@@ -21,7 +21,26 @@ class CachedShift {
   const Bsdf& bsdf_at(const SurfaceInteraction& si) const {
     return desc_.bsdfs[size_t(desc_.shapes[size_t(si.shape)].bsdf)];
   }
-  bool diffuse(const Bsdf& b) const { return b.roughness() > settings_.diffuse_roughness; }
+  // Vertex classes (Kettunen et al. 2015, by the lobe the base sampled): a
+  // vertex the base left through a Dirac lobe is specular; otherwise it is as
+  // rough as the BSDF's smoothest non-Dirac lobe. A smooth plastic whose
+  // diffuse base was sampled is diffuse and can reconnect.
+  // The hybrid shift keeps classifying whole BSDFs: its replayed prefix may
+  // pick another lobe at x'_k than the base did at x_k, and the reverse shift
+  // would then classify that vertex differently (not invertible).
+  bool diffuse_for(const Bsdf& b, const BsdfSample& sampled) const {
+    if (replay_prefix_) return b.roughness() > settings_.diffuse_roughness;
+    return !sampled.is_delta() && bsdf_smooth_roughness(b) > settings_.diffuse_roughness;
+  }
+  // The vertex after the reconnection, x_{k+1} (or the offset's x'_{k+1} for
+  // the invertibility test, which will copy the base's lobe there): diffuse if
+  // its BSDF is, unless the base leaves it through a Dirac lobe, which a
+  // changed incoming direction could not follow.
+  bool diffuse_next(const Bsdf& b, const PathVertex& base_next) const {
+    if (replay_prefix_) return b.roughness() > settings_.diffuse_roughness;
+    const bool leaves = base_next.next == PathNext::kSurface || base_next.next == PathNext::kEscaped;
+    return bsdf_smooth_roughness(b) > settings_.diffuse_roughness && !(leaves && base_next.bs.is_delta());
+  }
 
   void technique(Rgb c_b, Rgb c_o, double ratio) { acc_.technique(c_b, c_o, ratio); }
   void fail_from(size_t i, bool with_nee) { acc_.fail_from(i, with_nee); }
@@ -30,6 +49,7 @@ class CachedShift {
     trace_->offset.v.push_back(base_vertex);
     PathVertex& o = trace_->offset.v.back();
     o.si = si;
+    o.reconnect_pdf = -1.0f;  // the base's cache: not valid at the offset's positions
     o.bsdf = desc_.shapes[size_t(si.shape)].bsdf;
     o.has_nee = base_vertex.has_nee && !bsdf_at(si).is_delta_only();
     return &o;
@@ -127,9 +147,9 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
     }
 
     // ---- Not reconnected: reconnect to x_{k+1} if x_k, x'_k and x_{k+1} are all diffuse ----
-    const bool diffuse_b = diffuse(bsdf_b), diffuse_o = diffuse(bsdf_o);
-    const bool diffuse_next = escaped || diffuse(desc_.bsdfs[size_t(nv->bsdf)]);
-    if (diffuse_b && diffuse_o && diffuse_next) {
+    const bool diffuse_b = diffuse_for(bsdf_b, v.bs), diffuse_o = diffuse_for(bsdf_o, v.bs);
+    const bool diffuse_y = escaped || diffuse_next(desc_.bsdfs[size_t(nv->bsdf)], *nv);
+    if (diffuse_b && diffuse_o && diffuse_y) {
       Vec3f dir;
       float jacobian = 1.0f;
       Ray connect;
@@ -156,8 +176,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
           return acc_.result();
         }
         jacobian = (cos_o / cos_b) * (dist2_base / dist2);
-        connect = so.spawn_ray(dir);
-        connect.tmax = dist * (1.0f - kShadowEpsilon);
+        connect = so.spawn_ray_to(nv->si);
       }
       ++counters_.rays;
       if (scene_.occluded(connect)) {
@@ -241,7 +260,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
     }
     // Invertibility (§2): the reverse shift, seeing x_k, x'_k and x'_{k+1} all
     // diffuse, would reconnect where this one did not.
-    if (diffuse_b && diffuse_o && diffuse(bsdf_at(sn))) {
+    if (diffuse_b && diffuse_o && diffuse_next(bsdf_at(sn), *nv)) {
       fail_from(i, false);
       return acc_.result();
     }

@@ -43,6 +43,17 @@ struct SurfaceInteraction {
     return p + n * mag;
   }
   Ray spawn_ray(Vec3f d) const { return Ray{offset_p(d), d, 0.0f, kInfinity}; }
+  // A visibility ray to the surface point y, offset at both ends and aimed
+  // from the offset origin to the offset target (pbrt-v4's SpawnRayTo). A ray
+  // parallel to p -> y.p from the offset origin reaches y's plane early when it
+  // arrives at an angle, and y's own triangle then occludes it.
+  Ray spawn_ray_to(const SurfaceInteraction& y) const {
+    const Vec3f to = y.p - p;
+    const Vec3f o = offset_p(to), target = y.offset_p(-to);
+    const Vec3f d = target - o;
+    const float dist = length(d);
+    return Ray{o, d * (1.0f / dist), 0.0f, dist * (1.0f - kShadowEpsilon)};
+  }
 };
 
 }  // namespace gdvr
