@@ -244,7 +244,7 @@ Expected<TriangleMesh> parse_ply(const std::string& data, const std::string& ori
             double v = 0;
             if (!reader.read(p.type, &v)) return body_error("truncated face data");
             if (int(k) == list_k) {
-              if (v < 0 || v >= 4294967295.0) return body_error("negative or huge vertex index");
+              if (!(v >= 0 && v < 4294967295.0)) return body_error("negative, huge or NaN vertex index");
               poly.push_back(uint32_t(v));
             }
           }

@@ -76,6 +76,29 @@ TEST(SceneFuzzRegressionTest, PlyFloatListLengthOutOfRangeIsAnError) {
   }
 }
 
+// fuzz_ply: a face list of float64 vertex indices holding NaN passed the
+// "negative or huge" test (every comparison with NaN is false) and was
+// converted to uint32_t: undefined behaviour (UBSan, corpus file ply-crash-1144...).
+TEST(SceneFuzzRegressionTest, PlyNanOrOutOfRangeVertexIndexIsAnError) {
+  auto ply_with_index = [](double index) {
+    std::string h =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar float64 vertex_indices\nend_header\n";
+    std::string body(36, '\0');  // three vertices at the origin
+    body += '\x03';
+    const double indices[3] = {0.0, 1.0, index};
+    body += std::string(reinterpret_cast<const char*>(indices), sizeof(indices));
+    return h + body;
+  };
+  EXPECT_TRUE(parse_ply(ply_with_index(2.0), "ok.ply").ok());
+  for (double index : {std::nan(""), -1.0, 4294967296.0, 1e300}) {
+    SCOPED_TRACE(index);
+    auto r = parse_ply(ply_with_index(index), "bad.ply");
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.status().to_string().find("vertex index"), std::string::npos) << r.status().to_string();
+  }
+}
+
 // fuzz_gltf: a buffer URI too long to be a file name made
 // std::filesystem::weakly_canonical throw (ENAMETOOLONG) through tinygltf's
 // file-exists callback: std::terminate.
