@@ -40,12 +40,11 @@ inline Vec3f square_to_uniform_sphere(Vec2f u) {
 // that subtends 1e-4 rad, cos rounds to 1 in float and 1 - cos loses every
 // digit, which biased small sphere lights (issue 6, docs/stability.md).
 
-// 1 - cos(asin(sin_alpha)) without cancellation: sin^2 / (1 + cos).
+// 1 - cos(alpha) from sin^2(alpha) without cancellation: sin^2 / (1 + cos).
 inline double cone_one_minus_cos_from_sin2(double sin2_alpha) {
   double s2 = std::min(sin2_alpha, 1.0);
   return s2 / (1.0 + std::sqrt(1.0 - s2));
 }
-inline double cone_one_minus_cos(double sin_alpha) { return cone_one_minus_cos_from_sin2(sin_alpha * sin_alpha); }
 
 // Solid-angle pdf of a uniform direction in a cone with 1 - cos(half-angle) = one_minus_cos_max.
 inline float uniform_cone_pdf(double one_minus_cos_max) { return float(1.0 / (2.0 * kPi * one_minus_cos_max)); }
