@@ -24,10 +24,10 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   int spp_done = 0;
 
   // ---- Emitters seen directly: their own stratified pass (first, so a time
-  // budget includes it); it replaces the base paths' `direct` ----
+  // budget includes it); it replaces the base paths' `direct` except where it
+  // leaves pixels to them (DirectEmissionSettings::uniform_from_paths) ----
   auto direct = render_frame_direct(scene, settings, control);
   if (!direct.ok()) return direct.status();
-  Image direct_pass = std::move(direct->direct);
   rays += direct->rays;
   invalid += direct->invalid_samples;
   const bool timed = settings.time_budget_s > 0;
@@ -70,7 +70,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
 
   GptFrameResult result;
   result.buffers = film.resolve(spp_done);
-  if (!direct_pass.empty()) result.buffers.direct = std::move(direct_pass);
+  if (!direct->direct.empty()) result.buffers.direct = merge_direct_estimates(std::move(*direct), result.buffers.direct);
   result.spp = spp_done;
   result.rays = rays;
   result.temporal_rays = temporal_rays;

@@ -61,10 +61,14 @@ Status DirectEmissionSettings::validate() const {
 }
 
 Rgb first_hit_emission(const FrameScene& scene, const Ray& camera_ray) {
+  // Most camera rays hit a surface that does not emit: the shading data
+  // (normal interpolation, frame) is computed only for emitters.
+  RayHit hit;
+  if (!scene.intersect_hit(camera_ray, &hit)) return scene.eval_environment(camera_ray.d);
+  if (scene.emitter_of_shape(hit.id) < 0) return Rgb(0.0f);
   SurfaceInteraction si;
-  if (!scene.intersect(camera_ray, &si)) return scene.eval_environment(camera_ray.d);
-  if (scene.emitter_of_shape(si.shape) >= 0) return scene.eval_area_emitter(si);
-  return Rgb(0.0f);
+  scene.interaction(camera_ray, hit, &si);
+  return scene.eval_area_emitter(si);
 }
 
 Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, const PerspectiveCamera& camera,
@@ -98,12 +102,18 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
     if (!st.ok()) return st;
   }
 
+  if (adaptive && settings.uniform_from_paths) out.from_paths.assign(size_t(width) * size_t(height), 0);
+
   // ---- Stratified estimate per pixel ----
   Status st = run_tiles(width, height, opts, [&](const Tile& tile) {
     uint64_t tile_rays = 0, tile_invalid = 0, tile_edges = 0;
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) {
         const ProbeGrid::Variation var = adaptive ? probes.variation(x, y) : ProbeGrid::Variation::kSmooth;
+        if (var == ProbeGrid::Variation::kUniform && settings.uniform_from_paths) {
+          out.from_paths[size_t(y) * size_t(width) + size_t(x)] = 1;
+          continue;
+        }
         const int k = var == ProbeGrid::Variation::kEdge      ? settings.edge_strata
                       : var == ProbeGrid::Variation::kUniform ? 1
                                                               : settings.strata;
@@ -136,7 +146,20 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
   out.rays = rays;
   out.invalid_samples = invalid;
   out.edge_pixels = edges;
+  if (std::find(out.from_paths.begin(), out.from_paths.end(), uint8_t(1)) == out.from_paths.end())
+    out.from_paths.clear();
   return out;
+}
+
+Image merge_direct_estimates(DirectEmissionResult&& pass, const Image& paths, const Image* paths_b) {
+  Image direct = std::move(pass.direct);
+  if (pass.from_paths.empty()) return direct;
+  const int w = direct.width(), h = direct.height();
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (pass.from_paths[size_t(y) * size_t(w) + size_t(x)])
+        direct.set_rgb(x, y, paths_b ? (paths.rgb(x, y) + paths_b->rgb(x, y)) * 0.5f : paths.rgb(x, y));
+  return direct;
 }
 
 }  // namespace gdvr

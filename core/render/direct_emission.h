@@ -23,6 +23,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <vector>
 
 #include "core/image/image.h"
 #include "core/render/frame_scene.h"
@@ -41,6 +42,12 @@ struct DirectEmissionSettings {
   // With probes, pixels whose probes all see the same emission take a single
   // sample, and `strata` applies where the emission varies smoothly.
   int edge_strata = 16;
+  // Pixels whose probes all agree (one sample would do) take no ray of their
+  // own: the caller's paths, which see emitters at their camera vertex anyway,
+  // estimate them (DirectEmissionResult::from_paths). Only for callers that
+  // keep that estimate apart (the gradient-domain integrators); PT's paths
+  // leave emission out when the pass runs.
+  bool uniform_from_paths = false;
 
   bool enabled() const { return strata > 0; }
   Status validate() const;  // 0 <= strata <= edge_strata <= 64
@@ -50,7 +57,7 @@ struct DirectEmissionSettings {
 // estimator (the paths' own samples; what MitsubaAgreementTest compares),
 // gpt and tgpt, which add the direct light after the solve, the pass.
 inline DirectEmissionSettings default_direct_emission(bool gradient_domain) {
-  return gradient_domain ? DirectEmissionSettings{4, 16} : DirectEmissionSettings{0, 0};
+  return gradient_domain ? DirectEmissionSettings{4, 16, true} : DirectEmissionSettings{0, 0, false};
 }
 
 struct DirectEmissionResult {
@@ -58,7 +65,17 @@ struct DirectEmissionResult {
   uint64_t rays = 0;             // camera rays traced (k² per pixel)
   uint64_t invalid_samples = 0;  // non-finite emission dropped (counted, never silent)
   uint64_t edge_pixels = 0;      // pixels sampled with edge_strata
+  // Per pixel (row-major), 1 where the pass left the estimate to the caller's
+  // paths (settings.uniform_from_paths); empty when it left none.
+  std::vector<uint8_t> from_paths;
 };
+
+// The direct light of a frame: the pass's estimate, and the paths' (the mean
+// first-hit emission of the caller's own camera samples; the mean of two
+// equal-sized sets of paths when `paths_b` is given) where the pass left the
+// pixel to them. Unbiased: which pixels those are depends only on the
+// deterministic probes, never on the paths' random numbers.
+Image merge_direct_estimates(DirectEmissionResult&& pass, const Image& paths, const Image* paths_b = nullptr);
 
 // The stream the gradient-domain integrators pass for every frame (a fixed
 // jitter pattern; the pass's sample indices never meet the paths' own).

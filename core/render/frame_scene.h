@@ -22,6 +22,7 @@ struct EmitterSample {
   bool delta = false;
   Rgb weight;            // Le / pdf (already divided; zero when it does not emit towards us)
   int emitter = -1;
+  Vec3f p, n;            // area emitters: the sampled point and its normal
 };
 
 class FrameScene {
@@ -39,6 +40,12 @@ class FrameScene {
   bool has_environment() const { return environment_ >= 0; }
 
   bool intersect(const Ray& ray, SurfaceInteraction* si) const;
+  // The closest hit without its shading data (no interpolation, no frame),
+  // for callers that need only what was hit; interaction() completes it.
+  bool intersect_hit(const Ray& ray, RayHit* hit) const {
+    return accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, hit);
+  }
+  void interaction(const Ray& ray, const RayHit& hit, SurfaceInteraction* si) const;
   bool occluded(const Ray& ray) const { return accel_->occluded(ray.o, ray.d, ray.tmin, ray.tmax); }
   // Occluded by an animated shape (the only ones whose place can change
   // between frames; static shapes are skipped).
@@ -54,6 +61,14 @@ class FrameScene {
   // produced `hit` from `ref_p`.
   float pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& hit) const;
   float pdf_environment_direction(Vec3f d) const;
+  // A sphere light's point, sampled as `sample` from another reference point,
+  // seen from `ref`: direction, distance, the solid-angle pdf with which
+  // sample_emitter_direction would produce it from `ref` (0 where it cannot:
+  // the point is not on the cap of the sphere that `ref` sees) and Le / pdf.
+  // For the spatial shift, whose offsets reconnect to the base's light point.
+  // `sample` must come from a sphere emitter (is_sphere_emitter).
+  EmitterSample sphere_emitter_sample_at(const SurfaceInteraction& ref, const EmitterSample& sample) const;
+  bool is_sphere_emitter(int emitter) const;
   // Radiance leaving an emitting surface towards -ray (area emitters).
   Rgb eval_area_emitter(const SurfaceInteraction& si) const;
   // Radiance arriving along a ray that escaped the scene.

@@ -39,8 +39,11 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
   int spp_done = 0;
 
   // ---- Emitters seen directly: their own stratified pass (first, so a time
-  // budget includes it); the paths then leave out emission at depth 0 ----
-  auto direct = render_frame_direct(scene, settings, control);
+  // budget includes it); the paths then leave out emission at depth 0, so the
+  // pass must estimate every pixel itself ----
+  FrameRenderSettings direct_settings = settings;
+  direct_settings.direct.uniform_from_paths = false;
+  auto direct = render_frame_direct(scene, direct_settings, control);
   if (!direct.ok()) return direct.status();
   Image direct_pass = std::move(direct->direct);
   rays += direct->rays;

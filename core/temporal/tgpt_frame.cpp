@@ -40,14 +40,12 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
   const auto start = std::chrono::steady_clock::now();
   TgptFrameRender out;
   // ---- Direct light: one stratified pass for the frame, the same jitter in
-  // every frame (first, so that a time budget includes it) ----
-  {
-    auto direct = render_frame_direct(scene, render, control);
-    if (!direct.ok()) return direct.status().with_context("direct light: ");
-    out.direct = std::move(direct->direct);
-    out.rays += direct->rays;
-    out.invalid_samples += direct->invalid_samples;
-  }
+  // every frame (first, so that a time budget includes it); the pixels it
+  // leaves to the paths are filled from both passes at the end ----
+  auto direct = render_frame_direct(scene, render, control);
+  if (!direct.ok()) return direct.status().with_context("direct light: ");
+  out.rays += direct->rays;
+  out.invalid_samples += direct->invalid_samples;
   const double direct_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // The passes take the direct light from their own camera samples (free
@@ -111,6 +109,8 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
     out.rays += out.backward.rays;
     out.temporal_rays += out.backward.rays;
   }
+  if (!direct->direct.empty())
+    out.direct = merge_direct_estimates(std::move(*direct), out.a.direct, &out.b.direct);
   if (!nb.next)
     out.left_out.push_back("temporal offsets: last frame of the shot (no next frame)");
   else if (!nb.to_next.any())

@@ -35,7 +35,8 @@ TEST_P(ShiftInvertibilityTest, ShiftingBackRecoversTheBasePathAndWeightsSumToOne
   PathRecord base;
   ShiftTrace fwd, bwd;
   int checked = 0, failed = 0, techniques = 0;
-  double worst_weight_sum = 0, worst_position = 0;
+  double worst_weight_sum = 0, worst_position = 0, worst_light_point = 0, worst_light_pdf = 0;
+  int light_points = 0;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x + 1 < w; ++x)
       for (uint32_t s = 0; s < 4; ++s) {
@@ -68,17 +69,34 @@ TEST_P(ShiftInvertibilityTest, ShiftingBackRecoversTheBasePathAndWeightsSumToOne
           float scale = 1.0f + max_component(Vec3f(std::abs(base.v[k].si.p.x), std::abs(base.v[k].si.p.y),
                                                    std::abs(base.v[k].si.p.z)));
           worst_position = std::max(worst_position, double(length(d) / scale));
+          // The emitter sample: the reverse shift reconnects to the base's
+          // light point (spheres) or replays it (triangles: the same point),
+          // and keeps the direction of an infinitely distant emitter.
+          const EmitterSample& eb = base.v[k].es;
+          if (base.v[k].has_nee && eb.pdf > 0) {
+            const EmitterSample& ebk = bwd.offset.v[k].es;
+            EXPECT_EQ(ebk.emitter, eb.emitter);
+            const double error = std::isfinite(eb.dist) ? double(length(ebk.p - eb.p) / (1.0f + length(eb.p)))
+                                                        : double(length(ebk.d - eb.d));
+            worst_light_point = std::max(worst_light_point, error);
+            if (ebk.pdf > 0)
+              worst_light_pdf = std::max(worst_light_pdf, std::abs(double(ebk.pdf) / double(eb.pdf) - 1.0));
+            ++light_points;
+          }
         }
       }
   std::printf("[ invertibility ] %s %s thr %.3g: %d pairs checked, %d forward failures, %d techniques, worst |w+w'-1| "
-              "%.2e, worst relative position error %.2e\n",
+              "%.2e, worst relative position error %.2e, %d light points: worst error %.2e, worst pdf error %.2e\n",
               shift_mapping_name(ic.shift), ic.scene, ic.diffuse_roughness, checked, failed, techniques,
-              worst_weight_sum, worst_position);
+              worst_weight_sum, worst_position, light_points, worst_light_point, worst_light_pdf);
   EXPECT_GT(checked, 100);
   // Float geometry (cosines near grazing, spawn offsets) limits the agreement;
   // a wrong Jacobian or pdf shows as an O(1) error.
   EXPECT_LT(worst_weight_sum, 1e-2);
   EXPECT_LT(worst_position, 1e-4);
+  EXPECT_GT(light_points, 100);
+  EXPECT_LT(worst_light_point, 1e-4);
+  EXPECT_LT(worst_light_pdf, 1e-3);
 }
 
 TEST(ShiftReplayTest, ReplayWeightsAreOneHalfAndTheOffsetIsThePathTracer) {

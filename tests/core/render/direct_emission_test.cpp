@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "core/render/direct_emission.h"
+#include "core/scene/mitsuba_loader.h"
 #include "tests/core/gradient/gpt_test_util.h"
 
 namespace gdvr {
@@ -68,10 +70,42 @@ double squared_error(const Image& img) {
   return e;
 }
 
+// Checks that the mean of `runs` (one image per seed) equals the PT reference
+// within its noise. `samples` bounds the variance of one run's pixel: no
+// worse than as many independent uniform camera samples (stratification only
+// lowers it), taken from the reference's per-sample variance: a sample
+// variance over the seeds would be 0 where the light covers a sliver hit by
+// no stratum.
+void expect_unbiased(const std::vector<std::vector<double>>& runs, int samples, const std::string& what) {
+  const Reference& ref = pt_direct_reference();
+  const double seeds = double(runs.size());
+  double z2 = 0, z = 0;
+  int tested = 0;
+  for (size_t k = 0; k < ref.mean.size(); ++k) {
+    double m = 0;
+    for (const auto& r : runs) m += r[k] / seeds;
+    const double per_sample = ref.se[k] * ref.se[k] * kReferenceSamples;
+    const double var = per_sample / (double(samples) * seeds) + ref.se[k] * ref.se[k];
+    if (var <= 1e-12) {
+      // Both exact (fully inside or outside the light): they must agree.
+      EXPECT_NEAR(m, ref.mean[k], 1e-4 * (1 + ref.mean[k])) << what << ": value " << k;
+      continue;
+    }
+    const double zk = (m - ref.mean[k]) / std::sqrt(var);
+    z2 += zk * zk;
+    z += zk;
+    ++tested;
+  }
+  ASSERT_GT(tested, 10) << what << ": the light's edge must cross some pixels";
+  // E[z²] ≤ ~1.3 (the bound above, Student t of the reference's 7 dof); a
+  // biased estimate gives far more.
+  EXPECT_LT(z2 / tested, 2.0) << what;
+  EXPECT_LT(std::abs(z) / std::sqrt(double(tested)), 4.0) << what;
+}
+
 TEST(DirectEmissionTest, MeanOverSeedsEqualsThePathTracersFirstHitEmission) {
   auto ts = load_test_scene("cbox", kSize, kSize);
   ASSERT_TRUE(ts);
-  const Reference& ref = pt_direct_reference();
   // Plain stratified (no edge refinement) and edge-adaptive: both unbiased.
   for (DirectEmissionSettings ds : {DirectEmissionSettings{2, 2}, DirectEmissionSettings{2, 8}}) {
     constexpr int kSeeds = 16;
@@ -80,33 +114,80 @@ TEST(DirectEmissionTest, MeanOverSeedsEqualsThePathTracersFirstHitEmission) {
       Image img = direct_pass(*ts, ds, 100 + uint64_t(s));
       runs.emplace_back(img.data().begin(), img.data().end());
     }
-    double z2 = 0, z = 0;
-    int tested = 0;
-    for (size_t k = 0; k < ref.mean.size(); ++k) {
-      double m = 0;
-      for (const auto& r : runs) m += r[k] / kSeeds;
-      // The variance of the pass's mean is bounded by that of as many
-      // independent uniform samples (stratification only lowers it), taken
-      // from the reference's per-sample variance: a sample variance over the
-      // seeds would be 0 where the light covers a sliver hit by no stratum.
-      const double per_sample = ref.se[k] * ref.se[k] * kReferenceSamples;
-      const double var = per_sample / double(ds.strata * ds.strata * kSeeds) + ref.se[k] * ref.se[k];
-      if (var <= 1e-12) {
-        // Both exact (fully inside or outside the light): they must agree.
-        EXPECT_NEAR(m, ref.mean[k], 1e-4 * (1 + ref.mean[k])) << "value " << k;
-        continue;
-      }
-      const double zk = (m - ref.mean[k]) / std::sqrt(var);
-      z2 += zk * zk;
-      z += zk;
-      ++tested;
-    }
-    ASSERT_GT(tested, 10) << "the light's edge must cross some pixels";
-    // E[z²] ≤ ~1.3 (the bound above, Student t of the reference's 7 dof); a
-    // biased pass gives far more.
-    EXPECT_LT(z2 / tested, 2.0) << "strata " << ds.strata << "/" << ds.edge_strata;
-    EXPECT_LT(std::abs(z) / std::sqrt(double(tested)), 4.0) << "strata " << ds.strata << "/" << ds.edge_strata;
+    expect_unbiased(runs, ds.strata * ds.strata,
+                    "strata " + std::to_string(ds.strata) + "/" + std::to_string(ds.edge_strata));
   }
+}
+
+// Pixels whose probes agree are left to the caller's paths (what G-PT and
+// T-GPT do): they take no ray, and the merged estimate stays unbiased.
+TEST(DirectEmissionTest, PixelsLeftToThePathsTakeNoRayAndTheMergedEstimateStaysUnbiased) {
+  auto ts = load_test_scene("cbox", kSize, kSize);
+  ASSERT_TRUE(ts);
+  PerspectiveCamera camera(ts->desc.camera, kSize, kSize);
+  const DirectEmissionSettings own{2, 8, false}, left{2, 8, true};
+  auto all = render_direct_emission(*ts->scene, camera, kSize, kSize, own, 7, 0, ts->render.path, 2, nullptr);
+  auto some = render_direct_emission(*ts->scene, camera, kSize, kSize, left, 7, 0, ts->render.path, 2, nullptr);
+  ASSERT_TRUE(all.ok() && some.ok());
+  EXPECT_TRUE(all->from_paths.empty());
+  ASSERT_EQ(some->from_paths.size(), size_t(kSize) * kSize);
+  uint64_t left_count = 0;
+  for (uint8_t f : some->from_paths) left_count += f;
+  // cbox: most pixels see no emitter at all; the light's pixels are not uniform.
+  EXPECT_GT(left_count, uint64_t(kSize * kSize / 2));
+  EXPECT_LT(left_count, uint64_t(kSize * kSize));
+  EXPECT_EQ(all->rays - some->rays, left_count) << "one ray fewer per pixel left to the paths";
+
+  // The paths' estimate: PT's own first-hit emission at 4 spp (as many
+  // samples as the pass's 2x2 strata, so the variance bound covers both).
+  constexpr int kSeeds = 16;
+  std::vector<std::vector<double>> runs;
+  for (int s = 0; s < kSeeds; ++s) {
+    auto pass = render_direct_emission(*ts->scene, camera, kSize, kSize, left, 100 + uint64_t(s), 0,
+                                       ts->render.path, 2, nullptr);
+    ASSERT_TRUE(pass.ok());
+    FrameRenderSettings rs = ts->render;
+    rs.spp = 4;
+    rs.seed = 700 + uint64_t(s);
+    auto pt = render_frame_pt(*ts->scene, rs, 0, {});
+    ASSERT_TRUE(pt.ok());
+    Image merged = merge_direct_estimates(std::move(*pass), pt->direct);
+    runs.emplace_back(merged.data().begin(), merged.data().end());
+  }
+  expect_unbiased(runs, 4, "pass merged with the paths");
+}
+
+// Inside the closed furnace every wall emits Le = 1: every pixel's probes
+// agree, so the pass traces only its probes and the paths fill in every pixel
+// (the mean of two sets of paths when both passes of T-GPT give one).
+TEST(DirectEmissionTest, UniformEmissionIsTakenFromThePaths) {
+  LoadOptions load;
+  load.params = {{"res", "16"}, {"max_depth", "2"}};
+  auto desc = load_mitsuba_scene(std::string(GDVR_SOURCE_DIR) + "/scenes/stiff/furnace.xml", load);
+  ASSERT_TRUE(desc.ok()) << desc.status().to_string();
+  auto fs = FrameScene::create(desc.value(), {});
+  ASSERT_TRUE(fs.ok());
+  constexpr int kRes = 16;
+  PerspectiveCamera camera(desc->camera, kRes, kRes);
+  PathTracerSettings path;
+  path.max_depth = 2;
+  auto pass = render_direct_emission(*fs.value(), camera, kRes, kRes, {4, 16, true}, 1, 0, path, 2, nullptr);
+  ASSERT_TRUE(pass.ok());
+  EXPECT_EQ(pass->rays, uint64_t(2 * kRes + 1) * uint64_t(2 * kRes + 1)) << "probes only";
+  ASSERT_EQ(pass->from_paths.size(), size_t(kRes) * kRes);
+  for (uint8_t f : pass->from_paths) EXPECT_EQ(f, 1);
+  for (float v : pass->direct.data()) EXPECT_EQ(v, 0.0f) << "no estimate of its own";
+
+  FrameRenderSettings rs;
+  rs.width = rs.height = kRes;
+  rs.spp = 2;
+  rs.path = path;
+  auto pt = render_frame_pt(*fs.value(), rs, 0, {});
+  ASSERT_TRUE(pt.ok());
+  Image half(kRes, kRes, 3);  // a second set of paths that saw half the radiance
+  for (float& v : half.data()) v = 0.5f;
+  Image merged = merge_direct_estimates(std::move(*pass), pt->direct, &half);
+  for (float v : merged.data()) EXPECT_FLOAT_EQ(v, 0.75f);
 }
 
 TEST(DirectEmissionTest, StrataAndEdgeRefinementLowerTheErrorOfTheLightsEdges) {
