@@ -30,14 +30,14 @@ class TemporalShift {
     return d.bsdfs[size_t(d.shapes[size_t(si.shape)].bsdf)];
   }
   bool diffuse(const Bsdf& b) const { return b.roughness() > settings_.diffuse_roughness; }
-  // A segment of frame t' from `from` over `dist` along `dir` is free (the
-  // same shadow epsilon as emitter sampling). `static_base_segment`: it is a
-  // segment of the base path (free in frame t) between two shapes that do not
-  // move, so only animated shapes can block it now; testing the static ones
-  // again would only add self-intersection noise at grazing angles.
-  bool unoccluded(const SurfaceInteraction& from, Vec3f dir, float dist, bool static_base_segment) {
-    Ray r = from.spawn_ray(dir);
-    r.tmax = dist * (1.0f - kShadowEpsilon);
+  // The segment from `from` to `to` is free in frame t' (a ray between the
+  // two offset end points, spawn_ray_to: a ray offset parallel to the segment
+  // is blocked by `to`'s own triangle when it arrives at an angle).
+  // `static_base_segment`: it is a segment of the base path (free in frame t)
+  // between two shapes that do not move, so only animated shapes can block it
+  // now; testing the static ones again would only add self-intersection noise.
+  bool unoccluded(const SurfaceInteraction& from, const SurfaceInteraction& to, bool static_base_segment) {
+    const Ray r = from.spawn_ray_to(to);
     ++counters_.rays;
     return static_base_segment ? !other_.occluded_by_animated(r) : !other_.occluded(r);
   }
@@ -196,7 +196,7 @@ ShiftResult TemporalShift::run(Vec2f film) {
     const Vec3f dir = d / dist;
     // The base's own segment x_k -> x_{k+1} (y_k = x_k, y_{k+1} = x_{k+1}).
     const bool static_base_segment = at_base_vertex && !motion_.moves(nv->si.shape);
-    if (!unoccluded(so, dir, dist, static_base_segment)) return fail(i);
+    if (!unoccluded(so, y, static_base_segment)) return fail(i);
     Rgb c_o;
     if (rigid) {
       beta *= v.bs.weight * inv_q;

@@ -143,7 +143,7 @@ TEST_P(TemporalShiftTest, ShiftingBackRecoversTheBasePathAndWeightsSumToOne) {
     for (const PathVertex& v : fwd.offset.v) moved += v.si.shape == GetParam().moving_shape ? 1 : 0;
     ShiftResult back = temporal_reconnection_shift(*f->scene_other, gpt, fwd.offset, film, backward, counters, &bwd);
     if (back.failed) {
-      ++back_failed;  // float geometry at grazing angles; counted and bounded below
+      ++back_failed;  // must not happen (float geometry at grazing angles aside): bounded below
       return;
     }
     ASSERT_EQ(fwd.ratios.size(), bwd.ratios.size());
@@ -170,7 +170,10 @@ TEST_P(TemporalShiftTest, ShiftingBackRecoversTheBasePathAndWeightsSumToOne) {
       worst_weight_sum, worst_position);
   EXPECT_GT(checked, 200);
   EXPECT_GT(moved, 0) << "the test needs paths through the moving shape";
-  EXPECT_LE(back_failed, checked / 50);
+  // With visibility rays aimed between the offset end points (spawn_ray_to)
+  // none fails on these scenes; rays offset parallel to the segment failed
+  // 0.5 % of them on veach-mis (blocked by the target's own triangle).
+  EXPECT_LE(back_failed, checked / 1000);
   // Float geometry at grazing reconnections limits the agreement of a few
   // pairs; a wrong Jacobian or pdf is an O(1) error in most of them.
   EXPECT_LT(worst_weight_sum, 1e-2);
