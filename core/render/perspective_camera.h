@@ -21,6 +21,7 @@ class PerspectiveCamera {
  private:
   Transform to_world_, to_camera_;
   Vec3f origin_;
+  Vec3f dir_at_origin_, dir_per_x_, dir_per_y_;  // unnormalised world direction at film (x, y): at_origin + x per_x + y per_y
   float inv_width_, inv_height_, tan_half_x_, tan_half_y_, near_, far_;
   int width_, height_;
 };
