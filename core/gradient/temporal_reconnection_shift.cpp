@@ -29,7 +29,22 @@ class TemporalShift {
     const Scene& d = other_.scene();
     return d.bsdfs[size_t(d.shapes[size_t(si.shape)].bsdf)];
   }
-  bool diffuse(const Bsdf& b) const { return b.roughness() > settings_.diffuse_roughness; }
+  // Vertex classes by the lobe the base sampled, as the spatial reconnection
+  // shift (reconnection_shift.cpp; Kettunen et al. 2015): a vertex the base
+  // left through a Dirac lobe is specular, otherwise it is as rough as its
+  // BSDF's smoothest non-Dirac lobe, so smooth plastic reconnects at its
+  // diffuse base. `sampled`: the base's sample at x_k (also used for y_k,
+  // which copies that lobe).
+  bool diffuse_for(const Bsdf& b, const BsdfSample& sampled) const {
+    return !sampled.is_delta() && bsdf_smooth_roughness(b) > settings_.diffuse_roughness;
+  }
+  // The vertex after the reconnection (x_{k+1}, or the offset's y_{k+1} for
+  // the invertibility test): diffuse if its BSDF is, unless the base leaves it
+  // through a Dirac lobe, which a changed incoming direction could not follow.
+  bool diffuse_next(const Bsdf& b, const PathVertex& base_next) const {
+    const bool leaves = base_next.next == PathNext::kSurface || base_next.next == PathNext::kEscaped;
+    return bsdf_smooth_roughness(b) > settings_.diffuse_roughness && !(leaves && base_next.bs.is_delta());
+  }
   // The segment from `from` to `to` is free in frame t' (a ray between the
   // two offset end points, spawn_ray_to: a ray offset parallel to the segment
   // is blocked by `to`'s own triangle when it arrives at an angle).
@@ -122,8 +137,9 @@ ShiftResult TemporalShift::run(Vec2f film) {
 
     // ---- Prefix: follow the base until x_k, y_k and x_{k+1} are all diffuse ----
     if (!carried) {
-      const bool diffuse_next = escaped || diffuse(desc_.bsdfs[size_t(nv->bsdf)]);
-      if (!(diffuse(bsdf_b) && diffuse(bsdf_o) && diffuse_next)) {
+      const bool diffuse_b = diffuse_for(bsdf_b, v.bs), diffuse_o = diffuse_for(bsdf_o, v.bs);
+      const bool diffuse_y = escaped || diffuse_next(desc_.bsdfs[size_t(nv->bsdf)], *nv);
+      if (!(diffuse_b && diffuse_o && diffuse_y)) {
         FollowedBounce fb;
         if (!follow_base_bounce(bsdf_o, so, v, /* replay = */ false, inv_q, &beta, &ratio, &fb)) return fail(i);
         const Vec3f d_o = so.sh_frame.to_world(fb.wi);
@@ -142,7 +158,7 @@ ShiftResult TemporalShift::run(Vec2f film) {
         }
         // Invertibility (§2): the reverse shift, seeing x_k, y_k and y_{k+1}
         // all diffuse, would reconnect where this one did not.
-        if (diffuse(bsdf_b) && diffuse(bsdf_o) && diffuse(bsdf_of(sn))) return fail(i);
+        if (diffuse_b && diffuse_o && diffuse_next(bsdf_of(sn), *nv)) return fail(i);
         acc_.technique(c_b_next, offset_emission(other_, so.p, sn, beta, fb.pdf, fb.delta), ratio);
         so = sn;
         rec = record(so, *nv);

@@ -21,11 +21,14 @@ constexpr int kRes = 16;
 
 // `camera_moves`: the camera also dollies (the path-space shift reconnects
 // where the replayed paths decorrelate after the first bounce).
+// `matpreview`: instead, the camera of scenes/matpreview moves around the
+// smooth-plastic object under its environment map (no shape moves), so the
+// path-space shift reconnects at the plastic's diffuse base.
 JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed, bool camera_moves = false,
-                   const std::string& temporal_shift = "replay") {
+                   const std::string& temporal_shift = "replay", bool matpreview = false) {
   JobSpec job;
   job.temporal_shift = temporal_shift;
-  job.scene = "cbox_demo.xml";
+  job.scene = matpreview ? "matpreview.xml" : "cbox_demo.xml";
   job.frames = "0,6";  // consecutive frames of the job, a quarter second apart: a clear change
   job.fps = 24;
   job.width = job.height = kRes;
@@ -33,6 +36,18 @@ JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed, bool c
   job.seed = seed;
   job.integrator = integrator;
   job.reconstruction.method = "l2";
+  if (matpreview) {
+    job.params["max_depth"] = "6";  // the scene's -1 (unbounded) only adds deep, dim paths
+    Track cam;
+    cam.target = "camera";
+    Transform t0, t1;
+    const Vec3f target(3.04072f, -2.85176f, 2.80939f), up(-0.317366f, 0.312466f, 0.895346f);
+    EXPECT_TRUE(Transform::look_at({3.69558f, -3.46243f, 3.25463f}, target, up, &t0));
+    EXPECT_TRUE(Transform::look_at({3.89558f, -3.26243f, 3.25463f}, target, up, &t1));
+    cam.keys = {Keyframe{0.0, t0}, Keyframe{1.0, t1}};
+    job.animation.tracks.push_back(cam);
+    return job;
+  }
   Track box;
   box.target = "smallbox";
   box.keys = {Keyframe{0.0, Transform()}, Keyframe{1.0, Transform::translate({-70, 0, -60})}};
@@ -52,14 +67,16 @@ JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed, bool c
 struct TemporalCase {
   const char* temporal_shift;
   bool camera_moves;
+  bool matpreview = false;
 };
-void PrintTo(const TemporalCase& c, std::ostream* os) {
-  *os << c.temporal_shift << (c.camera_moves ? "/camera_moves" : "/box_moves");
+const char* case_name(const TemporalCase& c) {
+  return c.matpreview ? "matpreview_camera_moves" : c.camera_moves ? "camera_moves" : "box_moves";
 }
+void PrintTo(const TemporalCase& c, std::ostream* os) { *os << c.temporal_shift << "/" << case_name(c); }
 
 std::map<int, FrameBuffers> render(const JobSpec& job) {
   JobRunOptions options;
-  options.base_dir = std::string(GDVR_SOURCE_DIR) + "/scenes/demo";
+  options.base_dir = std::string(GDVR_SOURCE_DIR) + (job.scene == "matpreview.xml" ? "/scenes/matpreview" : "/scenes/demo");
   options.threads = 2;
   std::map<int, FrameBuffers> out;
   Status st = render_job_buffers(job, options, {0, 6}, [&](FrameBuffers&& b) {
@@ -75,9 +92,11 @@ class TemporalGradientTest : public ::testing::TestWithParam<TemporalCase> {};
 TEST_P(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
   const TemporalCase tc = GetParam();
   // ---- Converged reference: PT, indirect part (color − direct), 2048 spp ----
-  static std::map<bool, std::map<int, FrameBuffers>> references;
-  if (!references.count(tc.camera_moves)) references[tc.camera_moves] = render(moving_job("pt", 2048, 77, tc.camera_moves));
-  auto& ref = references[tc.camera_moves];
+  static std::map<std::string, std::map<int, FrameBuffers>> references;
+  const std::string key = case_name(tc);
+  if (!references.count(key))
+    references[key] = render(moving_job("pt", 2048, 77, tc.camera_moves, "replay", tc.matpreview));
+  auto& ref = references[key];
   ASSERT_EQ(ref.size(), 2u);
   auto indirect = [&](int f, int x, int y, int c) {
     return double(ref[f].layers.find("")->image.at(x, y, c)) - ref[f].layers.find("direct")->image.at(x, y, c);
@@ -111,7 +130,8 @@ TEST_P(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
   std::vector<double> sum(3 * n, 0.0), sum_sq(3 * n, 0.0);
   double moved = 0;
   for (int s = 0; s < kSeeds; ++s) {
-    auto b = render(moving_job("tgpt", 32, 1000 + 7919 * uint64_t(s), tc.camera_moves, tc.temporal_shift));
+    auto b = render(moving_job("tgpt", 32, 1000 + 7919 * uint64_t(s), tc.camera_moves, tc.temporal_shift,
+                               tc.matpreview));
     if (std::string(tc.temporal_shift) == "reconnect") {
       ASSERT_TRUE(b[0].layers.find("dt_fwd") && b[6].layers.find("dt_bwd")) << "no path-space temporal layers";
     }
@@ -150,8 +170,8 @@ TEST_P(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
     }
     z2 /= std::max(1, count);
     const double agg = sum_v > 0 ? sum_d / std::sqrt(sum_v) : 0;
-    std::printf("[ temporal ] %s/%s: mean z^2 %.3f over %d, aggregate z %.2f, estimator variance %.3g\n",
-                tc.temporal_shift, t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt", z2, count, agg,
+    std::printf("[ temporal ] %s/%s/%s: mean z^2 %.3f over %d, aggregate z %.2f, estimator variance %.3g\n",
+                tc.temporal_shift, case_name(tc), t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt", z2, count, agg,
                 sum_est_var / std::max(1, count));
     // Student t with 11 dof: E[z^2] = 11/9; a biased estimator shows as a clear excess.
     EXPECT_LT(z2, 1.8);
@@ -161,10 +181,10 @@ TEST_P(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
 
 INSTANTIATE_TEST_SUITE_P(Shifts, TemporalGradientTest,
                          ::testing::Values(TemporalCase{"replay", false}, TemporalCase{"reconnect", false},
-                                           TemporalCase{"replay", true}, TemporalCase{"reconnect", true}),
+                                           TemporalCase{"replay", true}, TemporalCase{"reconnect", true},
+                                           TemporalCase{"reconnect", true, true}),
                          [](const auto& info) {
-                           return std::string(info.param.temporal_shift) +
-                                  (info.param.camera_moves ? "_camera_moves" : "_box_moves");
+                           return std::string(info.param.temporal_shift) + "_" + case_name(info.param);
                          });
 
 // The frame renderer's ray accounting: zero temporal rays across static pairs.
