@@ -58,38 +58,18 @@ bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const 
   return true;
 }
 
-OffsetEmitterSample offset_emitter_sample(const FrameScene& scene, const SurfaceInteraction& so, const PathVertex& v,
-                                          bool same_emitters) {
-  OffsetEmitterSample out;
-  if (same_emitters && std::isinf(v.es.dist)) {
-    out.es = v.es;
-  } else if (same_emitters && v.es.pdf > 0 && scene.is_sphere_emitter(v.es.emitter)) {
-    out.es = scene.sphere_emitter_sample_at(so, v.es);
-    // Area-measure pdfs: solid-angle pdf times |cos at the light| / distance².
-    const auto area_pdf = [](const EmitterSample& es) {
-      return double(es.pdf) * std::abs(double(dot(es.n, es.d))) / (double(es.dist) * double(es.dist));
-    };
-    const double base_area = area_pdf(v.es), offset_area = area_pdf(out.es);
-    out.area_pdf_ratio = base_area > 0 ? offset_area / base_area : 0.0;
-  } else {
-    out.es = scene.sample_emitter_direction(so, v.u_select, v.u_light);
-  }
-  return out;
-}
-
 Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& so, const Bsdf& bsdf_o,
                             const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters, bool same_emitters) {
   if (bsdf_o.is_delta_only()) {
     *ratio = 0.0;  // the offset has no emitter sampling here: only the base generates this pair
     return Rgb(0.0f);
   }
-  const OffsetEmitterSample sample = offset_emitter_sample(scene, so, v, same_emitters);
-  const EmitterSample& eo = sample.es;
-  if (!(eo.pdf > 0) || !(v.es.pdf > 0) || !(sample.area_pdf_ratio > 0)) {
+  const EmitterSample eo =
+      same_emitters && std::isinf(v.es.dist) ? v.es : scene.sample_emitter_direction(so, v.u_select, v.u_light);
+  if (!(eo.pdf > 0) || !(v.es.pdf > 0)) {
     *ratio = 0.0;
     return Rgb(0.0f);
   }
-  *ratio *= sample.area_pdf_ratio;
   if (eo.weight.is_black()) return Rgb(0.0f);
   BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, so.sh_frame.to_local(eo.d));
   if (be.value.is_black()) return Rgb(0.0f);
@@ -98,9 +78,7 @@ Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& s
   ++counters.rays;
   if (scene.occluded(shadow)) return Rgb(0.0f);
   const float w = eo.delta ? 1.0f : mis_power(eo.pdf, be.pdf);
-  // eo.weight is Le / p' (solid angle, from so); the base drew the point with
-  // area pdf p, so f(T x)|J|/p(x) carries p'/p on top (1 when replayed).
-  return beta * be.value * eo.weight * (w * float(sample.area_pdf_ratio));
+  return beta * be.value * eo.weight * w;
 }
 
 Rgb offset_emission(const FrameScene& scene, Vec3f from, const SurfaceInteraction& hit, Rgb beta, float pdf,

@@ -24,29 +24,13 @@ struct FollowedBounce {
 bool follow_base_bounce(const Bsdf& bsdf_o, const SurfaceInteraction& so, const PathVertex& v, bool replay, float inv_q,
                         Rgb* beta, double* ratio, FollowedBounce* out);
 
-// The offset's emitter sample at `so` for the base vertex `v`'s, and the
-// factor p'/p of the light vertex's pdf in area measure that the shift's
-// Jacobian ratio takes on (1 where the sample's random numbers are replayed).
-// `same_emitters`: `scene` has the base's emitters (a spatial shift), so
-// - a sample of an infinitely distant emitter (environment, directional
-//   light), which does not depend on the shading point, is the base's;
-// - a sphere light's point is the base's (Kettunen et al. 2015 reconnect to
-//   the base's light point): replaying the cone sampling from `so` would
-//   cost as much again and land elsewhere on the sphere;
-// - other emitters replay the base's random numbers (a triangle's point does
-//   not depend on the shading point: it is the base's point anyway).
-struct OffsetEmitterSample {
-  EmitterSample es;
-  double area_pdf_ratio = 1.0;
-};
-OffsetEmitterSample offset_emitter_sample(const FrameScene& scene, const SurfaceInteraction& so, const PathVertex& v,
-                                          bool same_emitters);
-
 // Emitter sampling at the offset vertex `so` with the base vertex's light
-// sample (offset_emitter_sample), in `scene` (the offset's frame). Returns
-// the offset's contribution f(T x)|J|/p(x); multiplies *ratio by the light
-// vertex's pdf ratio, or sets it to 0 where the offset cannot generate the
-// technique (delta-only BSDF, zero light pdf).
+// sample (its random numbers), in `scene` (the offset's frame). Returns the
+// offset's contribution f(T x)/p(x); sets *ratio to 0 where the offset cannot
+// generate the technique (delta-only BSDF, zero light pdf), else leaves it.
+// `same_emitters`: `scene` has the base's emitters (a spatial shift), so a
+// sample of an infinitely distant emitter (environment, directional light),
+// which does not depend on the shading point, is the base's and is reused.
 Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& so, const Bsdf& bsdf_o,
                             const PathVertex& v, Rgb beta, double* ratio, PathCounters& counters, bool same_emitters);
 

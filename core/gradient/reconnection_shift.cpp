@@ -107,7 +107,7 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
           c_o = beta * be.value * v.es.weight * w;
         }
       } else {
-        if (rec && !bsdf_o.is_delta_only()) rec->es = offset_emitter_sample(scene_, so, v, /* same_emitters = */ true).es;
+        if (rec && !bsdf_o.is_delta_only()) rec->es = scene_.sample_emitter_direction(so, v.u_select, v.u_light);
         c_o = offset_emitter_sampling(scene_, so, bsdf_o, v, beta, &r, counters_, /* same_emitters = */ true);
       }
       technique(v.nee, c_o, r);

@@ -337,8 +337,6 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
       if (!(dist > 0) || !(pdf_solid_angle > 0) || !std::isfinite(pdf_solid_angle)) return es;
       es.d = d * (1.0f / dist);
       es.dist = dist;
-      es.p = p;
-      es.n = n;
       es.pdf = pdf_solid_angle * select_pdf;
       // One-sided: emits only on the side its normal faces.
       if (dot(n, es.d) < 0) es.weight = em.radiance / es.pdf;
@@ -404,45 +402,6 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
       return es;
     }
   }
-  return es;
-}
-
-bool FrameScene::is_sphere_emitter(int emitter) const {
-  if (emitter < 0 || size_t(emitter) >= scene_.emitters.size()) return false;
-  const Emitter& em = scene_.emitters[size_t(emitter)];
-  return em.type == EmitterType::kArea && scene_.shapes[size_t(em.shape)].type == ShapeType::kSphere;
-}
-
-EmitterSample FrameScene::sphere_emitter_sample_at(const SurfaceInteraction& ref, const EmitterSample& sample) const {
-  EmitterSample es;
-  es.emitter = sample.emitter;
-  es.p = sample.p;
-  es.n = sample.n;
-  const Emitter& em = scene_.emitters[size_t(sample.emitter)];
-  const ShapeState& s = shapes_[size_t(em.shape)];
-  const Vec3f d = sample.p - ref.p;
-  const float dist2 = length_squared(d);
-  const float dist = std::sqrt(dist2);
-  if (!(dist > 0)) return es;
-  es.d = d * (1.0f / dist);
-  es.dist = dist;
-  const Vec3f outward = sample.p - s.center;  // the geometric normal, whatever flip_normals says
-  float pdf_solid_angle;
-  const Vec3f dc = s.center - ref.p;
-  const float dc2 = length_squared(dc);
-  if (dc2 > s.radius * s.radius * (1.0f + 1e-5f)) {
-    // Outside: cone sampling from `ref` reaches only the cap that `ref` sees.
-    if (!(dot(outward, d) < 0)) return es;
-    pdf_solid_angle = uniform_cone_pdf(cone_one_minus_cos_from_sin2(double(s.radius) * double(s.radius) / double(dc2)));
-  } else {
-    // Inside: uniform area sampling, converted to solid angle.
-    const float abs_dn = std::abs(dot(d, sample.n));
-    if (!(abs_dn > 0)) return es;
-    pdf_solid_angle = dist2 * (dist / (s.area * abs_dn));
-  }
-  if (!(pdf_solid_angle > 0) || !std::isfinite(pdf_solid_angle)) return es;
-  es.pdf = pdf_solid_angle / float(scene_.emitters.size());
-  if (dot(sample.n, es.d) < 0) es.weight = em.radiance / es.pdf;
   return es;
 }
 

@@ -22,7 +22,6 @@ struct EmitterSample {
   bool delta = false;
   Rgb weight;            // Le / pdf (already divided; zero when it does not emit towards us)
   int emitter = -1;
-  Vec3f p, n;            // area emitters: the sampled point and its normal
 };
 
 class FrameScene {
@@ -61,14 +60,6 @@ class FrameScene {
   // produced `hit` from `ref_p`.
   float pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& hit) const;
   float pdf_environment_direction(Vec3f d) const;
-  // A sphere light's point, sampled as `sample` from another reference point,
-  // seen from `ref`: direction, distance, the solid-angle pdf with which
-  // sample_emitter_direction would produce it from `ref` (0 where it cannot:
-  // the point is not on the cap of the sphere that `ref` sees) and Le / pdf.
-  // For the spatial shift, whose offsets reconnect to the base's light point.
-  // `sample` must come from a sphere emitter (is_sphere_emitter).
-  EmitterSample sphere_emitter_sample_at(const SurfaceInteraction& ref, const EmitterSample& sample) const;
-  bool is_sphere_emitter(int emitter) const;
   // Radiance leaving an emitting surface towards -ray (area emitters).
   Rgb eval_area_emitter(const SurfaceInteraction& si) const;
   // Radiance arriving along a ray that escaped the scene.

@@ -69,14 +69,15 @@ TEST_P(ShiftInvertibilityTest, ShiftingBackRecoversTheBasePathAndWeightsSumToOne
           float scale = 1.0f + max_component(Vec3f(std::abs(base.v[k].si.p.x), std::abs(base.v[k].si.p.y),
                                                    std::abs(base.v[k].si.p.z)));
           worst_position = std::max(worst_position, double(length(d) / scale));
-          // The emitter sample: the reverse shift reconnects to the base's
-          // light point (spheres) or replays it (triangles: the same point),
-          // and keeps the direction of an infinitely distant emitter.
+          // The emitter sample: the reverse shift, replaying the light
+          // sample's random numbers from the recovered vertex, lands on the
+          // base's light point (or direction, for an infinitely distant one).
           const EmitterSample& eb = base.v[k].es;
           if (base.v[k].has_nee && eb.pdf > 0) {
             const EmitterSample& ebk = bwd.offset.v[k].es;
             EXPECT_EQ(ebk.emitter, eb.emitter);
-            const double error = std::isfinite(eb.dist) ? double(length(ebk.p - eb.p) / (1.0f + length(eb.p)))
+            const Vec3f pb = base.v[k].si.p + eb.d * eb.dist, pk = bwd.offset.v[k].si.p + ebk.d * ebk.dist;
+            const double error = std::isfinite(eb.dist) ? double(length(pk - pb) / (1.0f + length(pb)))
                                                         : double(length(ebk.d - eb.d));
             worst_light_point = std::max(worst_light_point, error);
             if (ebk.pdf > 0)
