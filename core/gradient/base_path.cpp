@@ -5,19 +5,18 @@
 
 namespace gdvr {
 
-void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const Ray& camera_ray,
+void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const CameraHit& first,
                      Sampler& sampler, PathCounters& counters, PathRecord* record) {
   const Scene& desc = scene.scene();
   PathRecord& rec = *record;
   rec.clear();
-  rec.camera_ray = camera_ray;
+  rec.camera_ray = first.ray;
   Rgb beta(1.0f);
   float eta = 1.0f;
-  Ray ray = camera_ray;
+  Ray ray = first.ray;
 
-  ++counters.rays;
-  SurfaceInteraction si;
-  if (!scene.intersect(ray, &si)) {
+  SurfaceInteraction si = first.si;
+  if (!first.hit) {
     if (!settings.hide_emitters) rec.direct = scene.eval_environment(ray.d);
     if (!is_finite(rec.direct)) {
       ++counters.invalid_samples;

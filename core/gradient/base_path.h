@@ -5,6 +5,7 @@
 // same seed and G-PT converges to the same image as PT.
 #pragma once
 
+#include "core/gradient/camera_hit.h"
 #include "core/gradient/path_record.h"
 #include "core/math/rng.h"
 #include "core/render/path_tracer.h"
@@ -12,7 +13,15 @@
 namespace gdvr {
 
 // Fills `record` (cleared first; its vertex storage is reused between calls).
-void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const Ray& camera_ray,
+// `first`: the camera ray and its traced first hit; `sampler` is positioned
+// after the camera's sub-pixel sample.
+void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const CameraHit& first,
                      Sampler& sampler, PathCounters& counters, PathRecord* record);
+
+// The same, tracing the camera ray itself.
+inline void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const Ray& camera_ray,
+                            Sampler& sampler, PathCounters& counters, PathRecord* record) {
+  trace_base_path(scene, settings, trace_camera_hit(scene, camera_ray, counters), sampler, counters, record);
+}
 
 }  // namespace gdvr

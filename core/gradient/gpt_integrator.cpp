@@ -48,14 +48,18 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
       tracer.set_temporal_target(temporal);
       GradientSample gs;
       uint64_t tile_shifts = 0, tile_failures = 0;
-      for (int y = tile.y0; y < tile.y1; ++y)
-        for (int x = tile.x0; x < tile.x1; ++x)
-          for (int s = first; s < first + count; ++s) {
-            tracer.sample(x, y, uint32_t(s), &gs);
+      // Sample-major: one sample index over the whole tile at a time, so that
+      // base paths and offsets can share the index's camera-ray hits.
+      for (int s = first; s < first + count; ++s) {
+        tracer.begin_sample(tile, uint32_t(s));
+        for (int y = tile.y0; y < tile.y1; ++y)
+          for (int x = tile.x0; x < tile.x1; ++x) {
+            tracer.sample(x, y, &gs);
             film.add(x, y, uint32_t(s), gs);
             tile_shifts += uint64_t(gs.shifts);
             tile_failures += uint64_t(gs.failures);
           }
+      }
       rays += tracer.counters().rays;
       temporal_rays += tracer.temporal_rays();
       invalid += tracer.counters().invalid_samples;

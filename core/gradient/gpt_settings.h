@@ -27,6 +27,15 @@ struct GptSettings {
   // probability q = max(min(1, lum f(x)), q_min) and divide by q.
   bool cached_rr = true;
   float cached_rr_min_q = 0.1f;
+  // Sample s of every pixel goes through the same sub-pixel position, drawn
+  // per (seed, frame, s): the offset of pixel p into its neighbour j then
+  // starts with j's own base camera ray, and the first hit is traced once
+  // for both (CameraHitCache). Each pixel's estimate is as before (the
+  // position is uniform in the pixel); what changes is that neighbouring
+  // pixels' anti-aliasing errors are correlated. Off: independent positions
+  // per pixel, as PT's (the base paths are then exactly PT's paths for the
+  // same seed; with it on, only their camera rays differ).
+  bool shared_jitter = true;
   // A vertex whose BSDF roughness exceeds this is "diffuse" (reconnectable);
   // otherwise glossy/specular (half-vector copy). 0.001 in the G-PT release.
   float diffuse_roughness = 0.001f;

@@ -12,17 +12,35 @@ GradientTracer::GradientTracer(const FrameScene& scene, const PerspectiveCamera&
                                const PathTracerSettings& path, const GptSettings& settings, uint64_t seed,
                                uint32_t frame)
     : scene_(scene), camera_(camera), width_(width), height_(height), path_(path), settings_(settings),
-      seed_(seed), frame_(frame) {
+      seed_(seed), frame_(frame), camera_hits_(scene, camera) {
   base_.v.reserve(64);
 }
 
-void GradientTracer::sample(int x, int y, uint32_t s, GradientSample* out) {
+void GradientTracer::begin_sample(const Tile& tile, uint32_t s) {
+  s_ = s;
+  if (!settings_.shared_jitter) return;
+  // A pixel no image has (coordinates are bounded far below 2^32 - 1) keys the
+  // shared position, so it is independent of every pixel's own stream.
+  Sampler shared(seed_, frame_, ~0u, ~0u, s);
+  shared_jitter_ = shared.next_2d();
+  camera_hits_.begin(tile, shared_jitter_);
+}
+
+void GradientTracer::sample(int x, int y, GradientSample* out) {
   *out = GradientSample();
-  Sampler sampler(seed_, frame_, uint32_t(x), uint32_t(y), s);
-  const Vec2f jitter = sampler.next_2d();  // box filter, as render_frame_pt
-  const Ray ray = camera_.generate_ray({float(x) + jitter.x, float(y) + jitter.y});
+  Sampler sampler(seed_, frame_, uint32_t(x), uint32_t(y), s_);
+  // Box filter, as render_frame_pt. The pixel's own position is drawn even
+  // when the shared one is used, so the rest of its stream stays PT's.
+  const Vec2f own_jitter = sampler.next_2d();
+  const bool shared = settings_.shared_jitter;
+  const Vec2f jitter = shared ? shared_jitter_ : own_jitter;
   const Sampler after_camera = sampler;
-  trace_base_path(scene_, path_, ray, sampler, counters_, &base_);
+  if (shared) {
+    trace_base_path(scene_, path_, camera_hits_.at(x, y, counters_), sampler, counters_, &base_);
+  } else {
+    trace_base_path(scene_, path_, camera_.generate_ray({float(x) + jitter.x, float(y) + jitter.y}), sampler,
+                    counters_, &base_);
+  }
   if (base_.invalid) return;
   out->primal = base_.indirect;
   out->direct = base_.direct;
@@ -56,14 +74,19 @@ void GradientTracer::sample(int x, int y, uint32_t s, GradientSample* out) {
   for (int o = 0; o < kOffsetCount; ++o) {
     const int nx = x + kOffsetDx[size_t(o)], ny = y + kOffsetDy[size_t(o)];
     if (nx < 0 || ny < 0 || nx >= width_ || ny >= height_) continue;
-    const Ray offset_ray = camera_.generate_ray({float(nx) + jitter.x, float(ny) + jitter.y});
     ShiftResult r;
-    switch (settings_.shift) {
-      case ShiftMapping::kReplay: r = replay_shift(scene_, path_, base_, offset_ray, after_camera, counters_); break;
-      case ShiftMapping::kReconnect: r = reconnection_shift(scene_, settings_, base_, offset_ray, counters_); break;
-      case ShiftMapping::kHybrid:
-        r = shift_from_cache(scene_, settings_, base_, offset_ray, /* replay_prefix = */ true, counters_);
-        break;
+    if (settings_.shift == ShiftMapping::kReplay) {
+      // Replay re-traces the whole offset path from its camera ray (trace_path).
+      const Ray offset_ray = camera_.generate_ray({float(nx) + jitter.x, float(ny) + jitter.y});
+      r = replay_shift(scene_, path_, base_, offset_ray, after_camera, counters_);
+    } else {
+      const bool replay_prefix = settings_.shift == ShiftMapping::kHybrid;
+      if (shared) {
+        r = shift_from_cache(scene_, settings_, base_, camera_hits_.at(nx, ny, counters_), replay_prefix, counters_);
+      } else {
+        const Ray offset_ray = camera_.generate_ray({float(nx) + jitter.x, float(ny) + jitter.y});
+        r = shift_from_cache(scene_, settings_, base_, offset_ray, replay_prefix, counters_);
+      }
     }
     // Right/down estimate I(j) - I(p); left/up slots hold I(p) - I(j) (film convention).
     const float sign = (o == int(OffsetDir::kRight) || o == int(OffsetDir::kDown)) ? 1.0f : -1.0f;

@@ -4,6 +4,7 @@
 // per-sample loop does not allocate once the path record has grown.
 #pragma once
 
+#include "core/gradient/camera_hit_cache.h"
 #include "core/gradient/gpt_settings.h"
 #include "core/gradient/gradient_film.h"
 #include "core/gradient/path_record.h"
@@ -18,10 +19,15 @@ class GradientTracer {
   GradientTracer(const FrameScene& scene, const PerspectiveCamera& camera, int width, int height,
                  const PathTracerSettings& path, const GptSettings& settings, uint64_t seed, uint32_t frame);
 
-  // One sample of pixel (x, y) with sample index s: the base estimate, the
-  // four MIS-weighted gradient generations (divided by the cached-path RR
-  // probability) and the shift statistics.
-  void sample(int x, int y, uint32_t s, GradientSample* out);
+  // Starts sample index s of the pixels of `tile`; sample() then takes them
+  // in any order. With GptSettings::shared_jitter the first hits of the tile's
+  // camera rays (and of the ring around it) are traced once and shared by
+  // base paths and offsets (CameraHitCache).
+  void begin_sample(const Tile& tile, uint32_t s);
+  // One sample of pixel (x, y) of the current tile with the current sample
+  // index: the base estimate, the four MIS-weighted gradient generations
+  // (divided by the cached-path RR probability) and the shift statistics.
+  void sample(int x, int y, GradientSample* out);
 
   const PathCounters& counters() const { return counters_; }
   // Also shift every base path into another frame (T-GPT's path-space
@@ -39,6 +45,9 @@ class GradientTracer {
   const uint32_t frame_;
   PathCounters counters_;
   PathRecord base_;
+  uint32_t s_ = 0;       // the current sample index
+  Vec2f shared_jitter_;  // its sub-pixel position when shared
+  CameraHitCache camera_hits_;
   const TemporalShiftTarget* temporal_ = nullptr;
   uint64_t temporal_rays_ = 0;
 };

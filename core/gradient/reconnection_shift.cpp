@@ -15,7 +15,7 @@ class CachedShift {
       : scene_(scene), desc_(scene.scene()), settings_(settings), base_(base), replay_prefix_(replay_prefix),
         counters_(counters), trace_(trace), acc_(base, settings.mis_epsilon, trace ? &trace->ratios : nullptr) {}
 
-  ShiftResult run(const Ray& offset_ray);
+  ShiftResult run(const CameraHit& offset_first);
 
  private:
   const Bsdf& bsdf_at(const SurfaceInteraction& si) const {
@@ -65,22 +65,21 @@ class CachedShift {
   ShiftAccumulator acc_;
 };
 
-ShiftResult CachedShift::run(const Ray& offset_ray) {
+ShiftResult CachedShift::run(const CameraHit& offset_first) {
   const auto& verts = base_.v;
   if (trace_) {
     trace_->ratios.clear();
     trace_->offset.clear();
-    trace_->offset.camera_ray = offset_ray;
+    trace_->offset.camera_ray = offset_first.ray;
   }
   if (verts.empty()) return acc_.result();  // the base saw only the environment: nothing but `direct`
 
   // ---- x'_1: the offset's camera ray (same sub-pixel position, Jacobian 1 on the film) ----
-  SurfaceInteraction so;
-  ++counters_.rays;
-  if (!scene_.intersect(offset_ray, &so)) {
+  if (!offset_first.hit) {
     fail_from(0, true);
     return acc_.result();
   }
+  SurfaceInteraction so = offset_first.si;
   OffsetState state = OffsetState::kNotReconnected;
   Rgb beta(1.0f);     // f(T x)|J| / p(x) of the offset prefix
   double ratio = 1.0; // p(T x)|J| / p(x) of the prefix, per vertex in double (§8)
@@ -274,9 +273,10 @@ ShiftResult CachedShift::run(const Ray& offset_ray) {
 }  // namespace
 
 ShiftResult shift_from_cache(const FrameScene& scene, const GptSettings& settings, const PathRecord& base,
-                             const Ray& offset_ray, bool replay_prefix, PathCounters& counters, ShiftTrace* trace) {
+                             const CameraHit& offset_first, bool replay_prefix, PathCounters& counters,
+                             ShiftTrace* trace) {
   CachedShift shift(scene, settings, base, replay_prefix, counters, trace);
-  return shift.run(offset_ray);
+  return shift.run(offset_first);
 }
 
 }  // namespace gdvr

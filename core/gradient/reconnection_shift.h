@@ -13,6 +13,7 @@
 // Every branch checks that the reverse shift would take the same branch.
 #pragma once
 
+#include "core/gradient/camera_hit.h"
 #include "core/gradient/gpt_settings.h"
 #include "core/gradient/shift_mapping.h"
 #include "core/render/path_tracer.h"
@@ -20,10 +21,19 @@
 namespace gdvr {
 
 // `replay_prefix` = false: reconnection shift; true: hybrid shift.
-// `offset_ray`: the base's camera ray moved by one pixel (same sub-pixel position).
+// `offset_first`: the base's camera ray moved by one pixel (same sub-pixel
+// position) and its traced first hit.
 ShiftResult shift_from_cache(const FrameScene& scene, const GptSettings& settings, const PathRecord& base,
-                             const Ray& offset_ray, bool replay_prefix, PathCounters& counters,
+                             const CameraHit& offset_first, bool replay_prefix, PathCounters& counters,
                              ShiftTrace* trace = nullptr);
+
+// The same, tracing the offset's camera ray itself.
+inline ShiftResult shift_from_cache(const FrameScene& scene, const GptSettings& settings, const PathRecord& base,
+                                    const Ray& offset_ray, bool replay_prefix, PathCounters& counters,
+                                    ShiftTrace* trace = nullptr) {
+  return shift_from_cache(scene, settings, base, trace_camera_hit(scene, offset_ray, counters), replay_prefix,
+                          counters, trace);
+}
 
 inline ShiftResult reconnection_shift(const FrameScene& scene, const GptSettings& settings, const PathRecord& base,
                                       const Ray& offset_ray, PathCounters& counters, ShiftTrace* trace = nullptr) {

@@ -155,10 +155,12 @@ void run_cost(const Args& a, const BenchScene& bs, Loaded& l) {
   struct Config {
     ShiftMapping shift;
     bool rr;
+    bool shared_jitter = true;  // GptSettings::shared_jitter
   };
-  const std::vector<Config> all = {{ShiftMapping::kReplay, false},   {ShiftMapping::kReplay, true},
-                                   {ShiftMapping::kReconnect, true}, {ShiftMapping::kReconnect, false},
-                                   {ShiftMapping::kHybrid, true},    {ShiftMapping::kHybrid, false}};
+  const std::vector<Config> all = {{ShiftMapping::kReplay, false},       {ShiftMapping::kReplay, true},
+                                   {ShiftMapping::kReconnect, true},     {ShiftMapping::kReconnect, false},
+                                   {ShiftMapping::kReconnect, true, false}, {ShiftMapping::kHybrid, true},
+                                   {ShiftMapping::kHybrid, false}};
   const std::vector<Config> configs = a.default_only ? std::vector<Config>{all[2]} : all;
   std::vector<std::vector<double>> ratios(configs.size());
   std::vector<double> pt_times, fail_rates(configs.size());
@@ -172,6 +174,7 @@ void run_cost(const Args& a, const BenchScene& bs, Loaded& l) {
     for (size_t c = 0; c < configs.size(); ++c) {
       GptSettings g = GptSettings::defaults_for(configs[c].shift);
       g.cached_rr = configs[c].rr;
+      g.shared_jitter = configs[c].shared_jitter;
       auto r = render_frame_gpt(*l.scene, with_direct_pass(rs), g, 0, {});
       if (!r.ok()) std::exit(1);
       ratios[c].push_back(r->seconds / pt->seconds);
@@ -181,8 +184,9 @@ void run_cost(const Args& a, const BenchScene& bs, Loaded& l) {
   std::printf("cost %s %dx%d %d spp: PT %.3f s (median of %d)\n", bs.name.c_str(), l.render.width, l.render.height,
               a.spp, median(pt_times), a.runs);
   for (size_t c = 0; c < configs.size(); ++c)
-    std::printf("  gpt %-9s cached_rr=%-3s time/PT %.2fx  (failure rate %.3f)\n", shift_mapping_name(configs[c].shift),
-                configs[c].rr ? "on" : "off", median(ratios[c]), fail_rates[c]);
+    std::printf("  gpt %-9s cached_rr=%-3s%s time/PT %.2fx  (failure rate %.3f)\n",
+                shift_mapping_name(configs[c].shift), configs[c].rr ? "on" : "off",
+                configs[c].shared_jitter ? "" : " own sub-pixel positions", median(ratios[c]), fail_rates[c]);
   std::fflush(stdout);
 }
 

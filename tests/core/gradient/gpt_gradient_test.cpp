@@ -16,23 +16,26 @@ namespace {
 
 using test::load_test_scene;
 
-// Per-pixel mean and variance of the mean of dx, dy over independent seeds.
+// Per-pixel mean and variance of the mean of some buffers over independent seeds.
 struct SeedStats {
-  std::vector<double> mean, var;  // [buffer(dx=0,dy=1)][pixel][channel] flattened
+  std::vector<double> mean, var;  // [buffer][pixel][channel] flattened
 };
 
-SeedStats gradient_stats(const test::TestScene& ts, const GptSettings& gpt, int spp, int seeds, uint64_t seed0) {
+using FilmBuffer = Image GradientFilmBuffers::*;
+
+SeedStats buffer_stats(const test::TestScene& ts, const GptSettings& gpt, int spp, int seeds, uint64_t seed0,
+                       const std::vector<FilmBuffer>& buffers) {
   FrameRenderSettings rs = ts.render;
   rs.spp = spp;
-  const size_t n = size_t(rs.width) * rs.height * 3;
-  std::vector<double> sum(2 * n, 0.0), sum_sq(2 * n, 0.0);
+  const size_t n = size_t(rs.width) * rs.height * 3, m = buffers.size() * n;
+  std::vector<double> sum(m, 0.0), sum_sq(m, 0.0);
   for (int s = 0; s < seeds; ++s) {
     rs.seed = seed0 + uint64_t(s) * 7919;
     auto r = render_frame_gpt(*ts.scene, rs, gpt, 0, {});
     EXPECT_TRUE(r.ok()) << r.status().to_string();
     if (!r.ok()) return {};
-    for (int b = 0; b < 2; ++b) {
-      const Image& img = b == 0 ? r->buffers.dx : r->buffers.dy;
+    for (size_t b = 0; b < buffers.size(); ++b) {
+      const Image& img = r->buffers.*buffers[b];
       for (size_t k = 0; k < n; ++k) {
         sum[b * n + k] += img.data()[k];
         sum_sq[b * n + k] += double(img.data()[k]) * img.data()[k];
@@ -40,13 +43,18 @@ SeedStats gradient_stats(const test::TestScene& ts, const GptSettings& gpt, int 
     }
   }
   SeedStats st;
-  st.mean.resize(2 * n);
-  st.var.resize(2 * n);
-  for (size_t k = 0; k < 2 * n; ++k) {
+  st.mean.resize(m);
+  st.var.resize(m);
+  for (size_t k = 0; k < m; ++k) {
     st.mean[k] = sum[k] / seeds;
     st.var[k] = std::max(0.0, (sum_sq[k] - seeds * st.mean[k] * st.mean[k]) / (seeds - 1)) / seeds;
   }
   return st;
+}
+
+// dx then dy.
+SeedStats gradient_stats(const test::TestScene& ts, const GptSettings& gpt, int spp, int seeds, uint64_t seed0) {
+  return buffer_stats(ts, gpt, spp, seeds, seed0, {&GradientFilmBuffers::dx, &GradientFilmBuffers::dy});
 }
 
 struct ZStats {
@@ -54,21 +62,23 @@ struct ZStats {
   int count = 0;
 };
 
-// z-scores of (a - b) with the variances va + vb, over the defined gradient pixels.
+// z-scores of (a - b) with the variances va + vb over `buffers` images of w x h
+// (for gradients: dx then dy, whose last column / row is undefined).
 ZStats compare(int w, int h, const std::vector<double>& a, const std::vector<double>& va,
-               const std::vector<double>& b, const std::vector<double>& vb) {
+               const std::vector<double>& b, const std::vector<double>& vb, bool gradients = true) {
   ZStats z;
   double sum_d = 0, sum_v = 0;
   const size_t n = size_t(w) * h * 3;
-  for (int buf = 0; buf < 2; ++buf)
+  const int buffers = int(a.size() / n);
+  for (int buf = 0; buf < buffers; ++buf)
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
-        if ((buf == 0 && x + 1 >= w) || (buf == 1 && y + 1 >= h)) continue;
+        if (gradients && ((buf == 0 && x + 1 >= w) || (buf == 1 && y + 1 >= h))) continue;
         for (int c = 0; c < 3; ++c) {
           size_t k = buf * n + (size_t(y) * w + x) * 3 + c;
           double d = a[k] - b[k], v = va[k] + vb[k];
           if (!(v > 1e-12)) {
-            EXPECT_NEAR(d, 0.0, 1e-4) << "noise-free gradient differs at " << x << "," << y;
+            EXPECT_NEAR(d, 0.0, 1e-4) << "noise-free pixel differs at " << x << "," << y;
             continue;
           }
           z.mean_z2 += d * d / v;
@@ -123,6 +133,32 @@ TEST_P(GptGradientTest, MeanGradientEqualsFiniteDifferenceOfConvergedPt) {
     // Student t with seeds-1 dof: E[z^2] = 11/9; a biased shift shows as a clear excess.
     EXPECT_LT(z.mean_z2, 1.8) << sc.name;
     EXPECT_LT(std::abs(z.aggregate_z), 4.5) << sc.name;
+  }
+}
+
+// The default shared sub-pixel position (GptSettings::shared_jitter) changes
+// the base paths' camera rays, not what they estimate: the primal's mean over
+// seeds equals the converged PT image, and so it does with positions per pixel.
+TEST_P(GptGradientTest, PrimalMeanEqualsConvergedPtWithSharedOrOwnSubPixelPositions) {
+  for (const char* name : {"cbox", "veach-mis"}) {
+    const int w = 16, h = 12;
+    auto ts = load_test_scene(name, w, h);
+    ASSERT_TRUE(ts);
+    const test::PtReference& ref = test::pt_reference(name, w, h, 4096);
+    const size_t n = size_t(w) * h * 3;
+    std::vector<double> pt(ref.indirect.data().begin(), ref.indirect.data().begin() + long(n));
+    std::vector<double> pt_var(ref.variance.data().begin(), ref.variance.data().begin() + long(n));
+    for (bool shared : {true, false}) {
+      GptSettings gpt = GptSettings::defaults_for(GetParam());
+      gpt.shared_jitter = shared;
+      SeedStats p = buffer_stats(*ts, gpt, 16, 12, 31, {&GradientFilmBuffers::primal});
+      ASSERT_FALSE(p.mean.empty());
+      ZStats z = compare(w, h, p.mean, p.var, pt, pt_var, /* gradients = */ false);
+      std::printf("[ primal ] %s %s shared_jitter=%d: mean z^2 %.3f over %d, aggregate z %.2f\n", name,
+                  shift_mapping_name(GetParam()), int(shared), z.mean_z2, z.count, z.aggregate_z);
+      EXPECT_LT(z.mean_z2, 1.8) << name << " shared_jitter=" << shared;
+      EXPECT_LT(std::abs(z.aggregate_z), 4.5) << name << " shared_jitter=" << shared;
+    }
   }
 }
 
