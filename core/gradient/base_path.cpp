@@ -15,7 +15,6 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
   float eta = 1.0f;
   Ray ray = first.ray;
 
-  SurfaceInteraction si = first.si;
   if (!first.hit) {
     if (!settings.hide_emitters) rec.direct = scene.eval_environment(ray.d);
     if (!is_finite(rec.direct)) {
@@ -26,10 +25,13 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
     return;
   }
 
+  // Each vertex's hit is written in place into the record (a copy of a just
+  // written SurfaceInteraction stalls on store-to-load forwarding).
+  rec.v.emplace_back();
+  rec.v.back().si = first.si;
   for (int depth = 0;; ++depth) {
-    rec.v.emplace_back();
-    PathVertex& v = rec.v.back();
-    v.si = si;
+    PathVertex& v = rec.v.back();  // valid until the next vertex is appended
+    const SurfaceInteraction& si = v.si;
     v.beta = beta;
     const Shape& shape = desc.shapes[size_t(si.shape)];
     v.bsdf = shape.bsdf;
@@ -61,23 +63,25 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
       v.has_nee = true;
       v.u_select = sampler.next_1d();
       v.u_light = sampler.next_2d();
-      v.es = scene.sample_emitter_direction(si, v.u_select, v.u_light);
-      if (!v.es.weight.is_black()) {
-        Vec3f wl = si.sh_frame.to_local(v.es.d);
+      // Computed on a local and recorded at the end, as for the hit above.
+      const EmitterSample es = scene.sample_emitter_direction(si, v.u_select, v.u_light);
+      if (!es.weight.is_black()) {
+        Vec3f wl = si.sh_frame.to_local(es.d);
         BsdfEval be = bsdf_eval_pdf(bsdf, si.uv, wo, wl);
         v.nee_f = be.value;
-        v.w_nee = v.es.delta ? 1.0f : mis_power(v.es.pdf, be.pdf);
-        if (!v.nee_f.is_black()) {
-          Ray shadow = si.spawn_ray(v.es.d);
-          shadow.tmax = std::isinf(v.es.dist) ? kInfinity : v.es.dist * (1.0f - kShadowEpsilon);
+        v.w_nee = es.delta ? 1.0f : mis_power(es.pdf, be.pdf);
+        if (!be.value.is_black()) {
+          Ray shadow = si.spawn_ray(es.d);
+          shadow.tmax = std::isinf(es.dist) ? kInfinity : es.dist * (1.0f - kShadowEpsilon);
           ++counters.rays;
           v.nee_visible = !scene.occluded(shadow);
           if (v.nee_visible) {
-            v.nee = beta * v.nee_f * v.es.weight * v.w_nee;
+            v.nee = beta * be.value * es.weight * v.w_nee;
             rec.indirect += v.nee;
           }
         }
       }
+      v.es = es;
     }
 
     // ---- BSDF sampling ----
@@ -104,23 +108,25 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
       beta *= 1.0f / q;
     }
 
+    // ---- The next vertex, intersected into a new record entry (dropped if the ray escapes) ----
     ++counters.rays;
-    SurfaceInteraction next;
-    if (!scene.intersect(ray, &next)) {
-      // The PathVertex reference is still valid: nothing was appended since.
-      v.next = PathNext::kEscaped;
-      v.escape_dir = d;
-      v.escape_le = scene.eval_environment(d);
-      if (!v.escape_le.is_black()) {
-        v.escape_pdf = v.bs.is_delta() ? 0.0f : scene.pdf_environment_direction(d);
-        v.w_escape = v.bs.is_delta() ? 1.0f : mis_power(v.bs.pdf, v.escape_pdf);
-        v.escape = beta * v.escape_le * v.w_escape;
-        rec.indirect += v.escape;
+    rec.v.emplace_back();  // `v` and `si` may move: only indices from here on
+    const bool hit = scene.intersect(ray, &rec.v.back().si);
+    if (!hit) rec.v.pop_back();
+    PathVertex& left = hit ? rec.v[rec.v.size() - 2] : rec.v.back();
+    if (!hit) {
+      left.next = PathNext::kEscaped;
+      left.escape_dir = d;
+      left.escape_le = scene.eval_environment(d);
+      if (!left.escape_le.is_black()) {
+        left.escape_pdf = left.bs.is_delta() ? 0.0f : scene.pdf_environment_direction(d);
+        left.w_escape = left.bs.is_delta() ? 1.0f : mis_power(left.bs.pdf, left.escape_pdf);
+        left.escape = beta * left.escape_le * left.w_escape;
+        rec.indirect += left.escape;
       }
       break;
     }
-    v.next = PathNext::kSurface;
-    si = next;
+    left.next = PathNext::kSurface;
   }
 
   if (!is_finite(rec.indirect) || !is_finite(rec.direct)) {

@@ -15,12 +15,17 @@ struct CameraHit {
   SurfaceInteraction si;  // valid when `hit`
 };
 
-// Intersects `ray` with the scene (one ray, counted).
+// Intersects `ray` with the scene (one ray, counted) into `*out`, written in
+// place: copying a just-written hit stalls on store-to-load forwarding.
+inline void trace_camera_hit(const FrameScene& scene, const Ray& ray, PathCounters& counters, CameraHit* out) {
+  out->ray = ray;
+  ++counters.rays;
+  out->hit = scene.intersect(ray, &out->si);
+}
+
 inline CameraHit trace_camera_hit(const FrameScene& scene, const Ray& ray, PathCounters& counters) {
   CameraHit h;
-  h.ray = ray;
-  ++counters.rays;
-  h.hit = scene.intersect(ray, &h.si);
+  trace_camera_hit(scene, ray, counters, &h);
   return h;
 }
 

@@ -21,7 +21,7 @@ const CameraHit& CameraHitCache::at(int x, int y, PathCounters& counters) {
   assert(lx >= 0 && ly >= 0 && lx < width_ && ly < height_);
   const size_t i = size_t(ly) * size_t(width_) + size_t(lx);
   if (!traced_[i]) {
-    hits_[i] = trace_camera_hit(scene_, camera_.generate_ray({float(x) + jitter_.x, float(y) + jitter_.y}), counters);
+    trace_camera_hit(scene_, camera_.generate_ray({float(x) + jitter_.x, float(y) + jitter_.y}), counters, &hits_[i]);
     traced_[i] = 1;
   }
   return hits_[i];
