@@ -1,6 +1,7 @@
 #include "core/render/direct_emission.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "core/math/rng.h"
@@ -51,6 +52,26 @@ class ProbeGrid {
   std::vector<float> luminance_;
 };
 
+// Per pixel (row-major), 1 where an area emitter's projected bounds (grown by
+// a pixel for rounding) reach it; empty when emission can be anywhere (an
+// environment emitter, or an emitter reaching behind the near plane).
+std::vector<uint8_t> emitter_footprint(const FrameScene& scene, const PerspectiveCamera& camera, int width,
+                                       int height) {
+  std::vector<Bounds3f> bounds;
+  if (!scene.emitter_bounds(&bounds)) return {};
+  std::vector<uint8_t> mask(size_t(width) * size_t(height), 0);
+  for (const Bounds3f& b : bounds) {
+    Vec2f lo, hi;
+    if (!camera.project_bounds(b, &lo, &hi)) return {};
+    const int x0 = int(std::max(0.0f, std::floor(lo.x) - 1.0f)), y0 = int(std::max(0.0f, std::floor(lo.y) - 1.0f));
+    const int x1 = int(std::min(float(width - 1), std::ceil(hi.x) + 1.0f));
+    const int y1 = int(std::min(float(height - 1), std::ceil(hi.y) + 1.0f));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) mask[size_t(y) * size_t(width) + size_t(x)] = 1;
+  }
+  return mask;
+}
+
 }  // namespace
 
 Status DirectEmissionSettings::validate() const {
@@ -81,10 +102,25 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
   DirectEmissionResult out;
   out.direct = Image(width, height, 3);
   if (path.hide_emitters) return out;
-  std::atomic<uint64_t> rays{0}, invalid{0}, edges{0};
+  std::atomic<uint64_t> rays{0}, invalid{0}, edges{0}, culled{0};
   TileRunOptions opts;
   opts.threads = threads;
   opts.cancel = cancel;
+
+  // ---- Pixels no emitter can be seen through: 0 exactly, without rays ----
+  const std::vector<uint8_t> footprint =
+      settings.cull_by_emitter_bounds ? emitter_footprint(scene, camera, width, height) : std::vector<uint8_t>();
+  auto may_see_emission = [&](int x, int y) {
+    return footprint.empty() || footprint[size_t(y) * size_t(width) + size_t(x)] != 0;
+  };
+  // Probe (i, j) belongs to the pixels x with 2x <= i <= 2x + 2 (and so in y).
+  auto probe_needed = [&](int i, int j) {
+    if (footprint.empty()) return true;
+    for (int y = std::max(0, (j - 1) / 2); y <= std::min(height - 1, j / 2); ++y)
+      for (int x = std::max(0, (i - 1) / 2); x <= std::min(width - 1, i / 2); ++x)
+        if (2 * x <= i && i <= 2 * x + 2 && 2 * y <= j && j <= 2 * y + 2 && may_see_emission(x, y)) return true;
+    return false;
+  };
 
   // ---- Probes (deterministic positions: the choice of the stratum count
   // depends on no random number of the estimate, so it stays unbiased) ----
@@ -92,12 +128,18 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
   ProbeGrid probes(adaptive ? width : 0, adaptive ? height : 0);
   if (adaptive) {
     Status st = run_tiles(probes.nx(), probes.ny(), opts, [&](const Tile& tile) {
+      uint64_t tile_rays = 0;
       for (int j = tile.y0; j < tile.y1; ++j)
         for (int i = tile.x0; i < tile.x1; ++i) {
+          if (!probe_needed(i, j)) {
+            probes.at(i, j) = 0.0f;
+            continue;
+          }
           const Rgb e = first_hit_emission(scene, camera.generate_ray({0.5f * float(i), 0.5f * float(j)}));
           probes.at(i, j) = is_finite(e) ? luminance(e) : 0.0f;
+          ++tile_rays;
         }
-      rays += uint64_t(tile.x1 - tile.x0) * uint64_t(tile.y1 - tile.y0);
+      rays += tile_rays;
     });
     if (!st.ok()) return st;
   }
@@ -106,9 +148,13 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
 
   // ---- Stratified estimate per pixel ----
   Status st = run_tiles(width, height, opts, [&](const Tile& tile) {
-    uint64_t tile_rays = 0, tile_invalid = 0, tile_edges = 0;
+    uint64_t tile_rays = 0, tile_invalid = 0, tile_edges = 0, tile_culled = 0;
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) {
+        if (!may_see_emission(x, y)) {
+          ++tile_culled;  // out.direct is already 0 there
+          continue;
+        }
         const ProbeGrid::Variation var = adaptive ? probes.variation(x, y) : ProbeGrid::Variation::kSmooth;
         if (var == ProbeGrid::Variation::kUniform && settings.uniform_from_paths) {
           out.from_paths[size_t(y) * size_t(width) + size_t(x)] = 1;
@@ -141,11 +187,13 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
     rays += tile_rays;
     invalid += tile_invalid;
     edges += tile_edges;
+    culled += tile_culled;
   });
   if (!st.ok()) return st;
   out.rays = rays;
   out.invalid_samples = invalid;
   out.edge_pixels = edges;
+  out.culled_pixels = culled;
   if (std::find(out.from_paths.begin(), out.from_paths.end(), uint8_t(1)) == out.from_paths.end())
     out.from_paths.clear();
   return out;

@@ -254,6 +254,24 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
 
 // ---- Emitters ----
 
+bool FrameScene::emitter_bounds(std::vector<Bounds3f>* bounds) const {
+  bounds->clear();
+  if (has_environment()) return false;
+  for (const Emitter& em : scene_.emitters) {
+    if (em.type != EmitterType::kArea) continue;
+    const ShapeState& s = shapes_[size_t(em.shape)];
+    Bounds3f b;
+    if (scene_.shapes[size_t(em.shape)].type == ShapeType::kSphere) {
+      b.expand(s.center - Vec3f(s.radius));
+      b.expand(s.center + Vec3f(s.radius));
+    } else {
+      for (Vec3f p : s.mesh->positions) b.expand(s.instanced ? s.to_world.point(p) : p);
+    }
+    bounds->push_back(b);
+  }
+  return true;
+}
+
 EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref, float u_select, Vec2f u) const {
   EmitterSample es;
   size_t count = scene_.emitters.size();

@@ -1,6 +1,8 @@
 #include "core/render/perspective_camera.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace gdvr {
 
@@ -56,6 +58,21 @@ bool PerspectiveCamera::project(Vec3f p, Vec2f* film) const {
   float sy = 0.5f * (1.0f - local.y / (local.z * tan_half_y_));
   *film = {sx * float(width_), sy * float(height_)};
   return film->x >= 0 && film->y >= 0 && film->x < float(width_) && film->y < float(height_);
+}
+
+bool PerspectiveCamera::project_bounds(const Bounds3f& b, Vec2f* lo, Vec2f* hi) const {
+  if (b.empty()) return false;
+  *lo = Vec2f(std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity());
+  *hi = Vec2f(-std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity());
+  for (int i = 0; i < 8; ++i) {
+    const Vec3f local = to_camera_.point(b.corner(i));
+    if (!(local.z > near_)) return false;
+    const Vec2f film(0.5f * (1.0f - local.x / (local.z * tan_half_x_)) * float(width_),
+                     0.5f * (1.0f - local.y / (local.z * tan_half_y_)) * float(height_));
+    lo->x = std::min(lo->x, film.x), lo->y = std::min(lo->y, film.y);
+    hi->x = std::max(hi->x, film.x), hi->y = std::max(hi->y, film.y);
+  }
+  return std::isfinite(lo->x) && std::isfinite(lo->y) && std::isfinite(hi->x) && std::isfinite(hi->y);
 }
 
 }  // namespace gdvr

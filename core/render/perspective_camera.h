@@ -2,6 +2,7 @@
 // +x to the image's left and +y up; fov is converted to the x axis per fov_axis.
 #pragma once
 
+#include "core/math/bounds.h"
 #include "core/render/ray.h"
 #include "core/scene/scene.h"
 
@@ -17,6 +18,11 @@ class PerspectiveCamera {
   // Pixel position (continuous) where world point p projects; false if behind
   // the camera or outside the image (used by temporal reprojection).
   bool project(Vec3f p, Vec2f* film) const;
+  // The film rectangle [lo, hi] that contains the image of the world box `b`
+  // (the bounds of its projected corners, which contain the projection of
+  // the whole box while it lies beyond the near plane). False when part of
+  // the box is not beyond the near plane: its image is then unbounded.
+  bool project_bounds(const Bounds3f& b, Vec2f* lo, Vec2f* hi) const;
 
  private:
   Transform to_world_, to_camera_;

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "core/math/rng.h"
 #include "core/render/perspective_camera.h"
 
 namespace gdvr {
@@ -33,6 +34,43 @@ TEST(CameraTest, ProjectInvertsGenerateRay) {
     EXPECT_NEAR(back.x, film.x, 1e-3f);
     EXPECT_NEAR(back.y, film.y, 1e-3f);
   }
+}
+
+// The film rectangle of a box contains the image of every point of the box
+// (projected even outside the image), and a box that reaches to or behind the
+// near plane has no bounded image.
+TEST(CameraTest, ProjectBoundsContainsTheImageOfTheWholeBox) {
+  Camera c;
+  ASSERT_TRUE(Transform::look_at({1, 2, 3}, {0, 0, 0}, {0, 1, 0}, &c.to_world));
+  c.fov = 50;
+  PerspectiveCamera cam(c, 64, 48);
+  Bounds3f box;
+  box.expand({-0.5f, -0.2f, -0.3f});
+  box.expand({0.4f, 0.6f, 0.2f});
+  Vec2f lo, hi;
+  ASSERT_TRUE(cam.project_bounds(box, &lo, &hi));
+  EXPECT_LT(lo.x, hi.x);
+  EXPECT_LT(lo.y, hi.y);
+  Sampler sampler(3, 0, 0, 0, 0);
+  int inside_image = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3f p(box.lo.x + (box.hi.x - box.lo.x) * sampler.next_1d(),
+                  box.lo.y + (box.hi.y - box.lo.y) * sampler.next_1d(),
+                  box.lo.z + (box.hi.z - box.lo.z) * sampler.next_1d());
+    // Where the camera ray through p meets the film (project() also reports
+    // points beyond the image's border there).
+    Vec2f film;
+    inside_image += cam.project(p, &film);
+    EXPECT_GE(film.x, lo.x - 1e-3f);
+    EXPECT_LE(film.x, hi.x + 1e-3f);
+    EXPECT_GE(film.y, lo.y - 1e-3f);
+    EXPECT_LE(film.y, hi.y + 1e-3f);
+  }
+  EXPECT_GT(inside_image, 0);
+  Bounds3f around_camera = box;
+  around_camera.expand({1, 2, 3});
+  EXPECT_FALSE(cam.project_bounds(around_camera, &lo, &hi));
+  EXPECT_FALSE(cam.project_bounds(Bounds3f(), &lo, &hi)) << "empty box";
 }
 
 // Mitsuba's convention: image right is the camera's -x (cross(dir, up)).

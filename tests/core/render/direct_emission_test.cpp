@@ -125,7 +125,9 @@ TEST(DirectEmissionTest, PixelsLeftToThePathsTakeNoRayAndTheMergedEstimateStaysU
   auto ts = load_test_scene("cbox", kSize, kSize);
   ASSERT_TRUE(ts);
   PerspectiveCamera camera(ts->desc.camera, kSize, kSize);
-  const DirectEmissionSettings own{2, 8, false}, left{2, 8, true};
+  // Without culling by emitter bounds (tested below), so that the pixels that
+  // see no emitter are left to the paths too.
+  const DirectEmissionSettings own{2, 8, false, false}, left{2, 8, true, false};
   auto all = render_direct_emission(*ts->scene, camera, kSize, kSize, own, 7, 0, ts->render.path, 2, nullptr);
   auto some = render_direct_emission(*ts->scene, camera, kSize, kSize, left, 7, 0, ts->render.path, 2, nullptr);
   ASSERT_TRUE(all.ok() && some.ok());
@@ -155,6 +157,48 @@ TEST(DirectEmissionTest, PixelsLeftToThePathsTakeNoRayAndTheMergedEstimateStaysU
     runs.emplace_back(merged.data().begin(), merged.data().end());
   }
   expect_unbiased(runs, 4, "pass merged with the paths");
+}
+
+// Pixels outside every emitter's projected bounds see no emission: they take
+// no probe and no sample and are 0, and the result (merged with the paths'
+// estimate as G-PT does, or the pass's own) is bit for bit the one without
+// culling. An environment emitter can be seen anywhere: nothing is culled.
+TEST(DirectEmissionTest, PixelsNoEmitterProjectsIntoAreZeroWithoutRays) {
+  for (const char* name : {"cbox", "veach-mis", "matpreview"}) {
+    auto ts = load_test_scene(name, kSize, kSize);
+    ASSERT_TRUE(ts);
+    PerspectiveCamera camera(ts->desc.camera, kSize, kSize);
+    FrameRenderSettings rs = ts->render;
+    rs.spp = 4;
+    rs.seed = 21;
+    auto pt = render_frame_pt(*ts->scene, rs, 0, {});
+    ASSERT_TRUE(pt.ok());
+    for (bool from_paths : {false, true}) {
+      DirectEmissionResult r[2];
+      for (int cull = 0; cull < 2; ++cull) {
+        auto pass = render_direct_emission(*ts->scene, camera, kSize, kSize, {4, 16, from_paths, cull == 1}, 5, 0,
+                                           ts->render.path, 2, nullptr);
+        ASSERT_TRUE(pass.ok()) << pass.status().to_string();
+        r[cull] = std::move(*pass);
+      }
+      const bool environment = std::string(name) == "matpreview";
+      EXPECT_EQ(r[0].culled_pixels, 0u);
+      if (environment) {
+        EXPECT_EQ(r[1].culled_pixels, 0u) << name;
+        EXPECT_EQ(r[1].rays, r[0].rays) << name;
+      } else {
+        EXPECT_GT(r[1].culled_pixels, uint64_t(kSize * kSize / 4)) << name;
+        EXPECT_LT(r[1].rays, r[0].rays) << name;
+      }
+      EXPECT_EQ(r[1].edge_pixels, r[0].edge_pixels) << name;
+      const uint64_t rays_culled = r[1].rays, rays_all = r[0].rays;
+      Image a = merge_direct_estimates(std::move(r[0]), pt->direct);
+      Image b = merge_direct_estimates(std::move(r[1]), pt->direct);
+      EXPECT_EQ(a.data(), b.data()) << name << (from_paths ? " merged with the paths" : " the pass alone");
+      std::printf("[ direct ] %s from_paths=%d: %llu rays, %llu with culling\n", name, int(from_paths),
+                  (unsigned long long)rays_all, (unsigned long long)rays_culled);
+    }
+  }
 }
 
 // Inside the closed furnace every wall emits Le = 1: every pixel's probes
