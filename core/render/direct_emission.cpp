@@ -52,24 +52,30 @@ class ProbeGrid {
   std::vector<float> luminance_;
 };
 
-// Per pixel (row-major), 1 where an area emitter's projected bounds (grown by
-// a pixel for rounding) reach it; empty when emission can be anywhere (an
-// environment emitter, or an emitter reaching behind the near plane).
-std::vector<uint8_t> emitter_footprint(const FrameScene& scene, const PerspectiveCamera& camera, int width,
-                                       int height) {
-  std::vector<Bounds3f> bounds;
-  if (!scene.emitter_bounds(&bounds)) return {};
-  std::vector<uint8_t> mask(size_t(width) * size_t(height), 0);
-  for (const Bounds3f& b : bounds) {
+// What a pixel's camera rays can hit that emits, from the area emitters'
+// projected bounds (grown by a pixel for rounding); it decides how the pixel
+// is probed.
+enum class Reach : uint8_t {
+  kNothing,      // no area emitter and no environment: 0 exactly, no ray
+  kEnvironment,  // only the environment: its four corner probes first, all nine where they differ
+  kEmitter,      // inside an area emitter's bounds: all nine probes
+};
+
+std::vector<Reach> emitter_reach(const FrameScene& scene, const PerspectiveCamera& camera, int width, int height,
+                                 bool use_bounds) {
+  const size_t n = size_t(width) * size_t(height);
+  if (!use_bounds) return std::vector<Reach>(n, Reach::kEmitter);
+  std::vector<Reach> reach(n, scene.has_environment() ? Reach::kEnvironment : Reach::kNothing);
+  for (const Bounds3f& b : scene.area_emitter_bounds()) {
     Vec2f lo, hi;
-    if (!camera.project_bounds(b, &lo, &hi)) return {};
+    if (!camera.project_bounds(b, &lo, &hi)) return std::vector<Reach>(n, Reach::kEmitter);  // unbounded image
     const int x0 = int(std::max(0.0f, std::floor(lo.x) - 1.0f)), y0 = int(std::max(0.0f, std::floor(lo.y) - 1.0f));
     const int x1 = int(std::min(float(width - 1), std::ceil(hi.x) + 1.0f));
     const int y1 = int(std::min(float(height - 1), std::ceil(hi.y) + 1.0f));
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) mask[size_t(y) * size_t(width) + size_t(x)] = 1;
+      for (int x = x0; x <= x1; ++x) reach[size_t(y) * size_t(width) + size_t(x)] = Reach::kEmitter;
   }
-  return mask;
+  return reach;
 }
 
 }  // namespace
@@ -107,41 +113,67 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
   opts.threads = threads;
   opts.cancel = cancel;
 
-  // ---- Pixels no emitter can be seen through: 0 exactly, without rays ----
-  const std::vector<uint8_t> footprint =
-      settings.cull_by_emitter_bounds ? emitter_footprint(scene, camera, width, height) : std::vector<uint8_t>();
-  auto may_see_emission = [&](int x, int y) {
-    return footprint.empty() || footprint[size_t(y) * size_t(width) + size_t(x)] != 0;
-  };
-  // Probe (i, j) belongs to the pixels x with 2x <= i <= 2x + 2 (and so in y).
-  auto probe_needed = [&](int i, int j) {
-    if (footprint.empty()) return true;
-    for (int y = std::max(0, (j - 1) / 2); y <= std::min(height - 1, j / 2); ++y)
-      for (int x = std::max(0, (i - 1) / 2); x <= std::min(width - 1, i / 2); ++x)
-        if (2 * x <= i && i <= 2 * x + 2 && 2 * y <= j && j <= 2 * y + 2 && may_see_emission(x, y)) return true;
-    return false;
-  };
-
   // ---- Probes (deterministic positions: the choice of the stratum count
-  // depends on no random number of the estimate, so it stays unbiased) ----
+  // depends on no random number of the estimate, so it stays unbiased). Only
+  // where emission can be seen (emitter_reach); where only the environment
+  // can, the pixel's corner probes come first and its other five only where
+  // the corners differ (an environment seen through a gap narrower than a
+  // pixel can then slip between them: the pixel is left with fewer strata,
+  // still unbiased) ----
+  const std::vector<Reach> reach = emitter_reach(scene, camera, width, height, settings.use_emitter_bounds);
+  auto reach_at = [&](int x, int y) { return reach[size_t(y) * size_t(width) + size_t(x)]; };
   const bool adaptive = settings.edge_strata > settings.strata;
   ProbeGrid probes(adaptive ? width : 0, adaptive ? height : 0);
-  if (adaptive) {
-    Status st = run_tiles(probes.nx(), probes.ny(), opts, [&](const Tile& tile) {
+  std::vector<uint8_t> probed(size_t(probes.nx()) * size_t(probes.ny()), 0);
+  std::vector<uint8_t> refine(size_t(width) * size_t(height), 0);  // kEnvironment pixels whose corners differ
+  // Whether `want` holds for a pixel that owns probe (i, j): pixel (x, y) owns
+  // the probes 2x..2x+2 by 2y..2y+2.
+  auto any_owner = [&](int i, int j, auto&& want) {
+    for (int y = std::max(0, (j - 1) / 2); y <= std::min(height - 1, j / 2); ++y)
+      for (int x = std::max(0, (i - 1) / 2); x <= std::min(width - 1, i / 2); ++x)
+        if (2 * x <= i && i <= 2 * x + 2 && 2 * y <= j && j <= 2 * y + 2 && want(x, y)) return true;
+    return false;
+  };
+  auto run_probes = [&](auto&& needed) {
+    return run_tiles(probes.nx(), probes.ny(), opts, [&](const Tile& tile) {
       uint64_t tile_rays = 0;
       for (int j = tile.y0; j < tile.y1; ++j)
         for (int i = tile.x0; i < tile.x1; ++i) {
-          if (!probe_needed(i, j)) {
-            probes.at(i, j) = 0.0f;
-            continue;
-          }
+          uint8_t& done = probed[size_t(j) * size_t(probes.nx()) + size_t(i)];
+          if (done || !needed(i, j)) continue;
           const Rgb e = first_hit_emission(scene, camera.generate_ray({0.5f * float(i), 0.5f * float(j)}));
           probes.at(i, j) = is_finite(e) ? luminance(e) : 0.0f;
+          done = 1;
           ++tile_rays;
         }
       rays += tile_rays;
     });
+  };
+  if (adaptive) {
+    Status st = run_probes([&](int i, int j) {
+      const bool corner = i % 2 == 0 && j % 2 == 0;
+      return any_owner(i, j, [&](int x, int y) {
+        const Reach r = reach_at(x, y);
+        return r == Reach::kEmitter || (r == Reach::kEnvironment && corner);
+      });
+    });
     if (!st.ok()) return st;
+    bool any_refine = false;
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        if (reach_at(x, y) != Reach::kEnvironment) continue;
+        const float c = probes.at(2 * x, 2 * y);
+        const bool differ = probes.at(2 * x + 2, 2 * y) != c || probes.at(2 * x, 2 * y + 2) != c ||
+                            probes.at(2 * x + 2, 2 * y + 2) != c;
+        refine[size_t(y) * size_t(width) + size_t(x)] = differ;
+        any_refine = any_refine || differ;
+      }
+    if (any_refine) {
+      st = run_probes([&](int i, int j) {
+        return any_owner(i, j, [&](int x, int y) { return refine[size_t(y) * size_t(width) + size_t(x)] != 0; });
+      });
+      if (!st.ok()) return st;
+    }
   }
 
   if (adaptive && settings.uniform_from_paths) out.from_paths.assign(size_t(width) * size_t(height), 0);
@@ -151,11 +183,15 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
     uint64_t tile_rays = 0, tile_invalid = 0, tile_edges = 0, tile_culled = 0;
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) {
-        if (!may_see_emission(x, y)) {
+        const Reach r = reach_at(x, y);
+        if (r == Reach::kNothing) {
           ++tile_culled;  // out.direct is already 0 there
           continue;
         }
-        const ProbeGrid::Variation var = adaptive ? probes.variation(x, y) : ProbeGrid::Variation::kSmooth;
+        const bool corners_agree = r == Reach::kEnvironment && !refine[size_t(y) * size_t(width) + size_t(x)];
+        const ProbeGrid::Variation var = !adaptive       ? ProbeGrid::Variation::kSmooth
+                                         : corners_agree ? ProbeGrid::Variation::kUniform
+                                                         : probes.variation(x, y);
         if (var == ProbeGrid::Variation::kUniform && settings.uniform_from_paths) {
           out.from_paths[size_t(y) * size_t(width) + size_t(x)] = 1;
           continue;

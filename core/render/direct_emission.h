@@ -48,9 +48,11 @@ struct DirectEmissionSettings {
   // keep that estimate apart (the gradient-domain integrators); PT's paths
   // leave emission out when the pass runs.
   bool uniform_from_paths = false;
-  // Pixels that no emitter's projected bounds reach see no emission (scenes
-  // without an environment emitter): they are 0 without a probe or a sample.
-  bool cull_by_emitter_bounds = true;
+  // Probe by the area emitters' projected bounds: pixels outside them see no
+  // emission but the environment's, if any. Without an environment they are
+  // 0 without a probe or a sample; with one, they take their four corner
+  // probes first and the other five only where those differ.
+  bool use_emitter_bounds = true;
 
   bool enabled() const { return strata > 0; }
   Status validate() const;  // 0 <= strata <= edge_strata <= 64
@@ -68,7 +70,7 @@ struct DirectEmissionResult {
   uint64_t rays = 0;             // camera rays traced (k² per pixel)
   uint64_t invalid_samples = 0;  // non-finite emission dropped (counted, never silent)
   uint64_t edge_pixels = 0;      // pixels sampled with edge_strata
-  uint64_t culled_pixels = 0;    // pixels outside every emitter's projected bounds: 0, no ray
+  uint64_t culled_pixels = 0;    // pixels that can see no emission (use_emitter_bounds): 0, no ray
   // Per pixel (row-major), 1 where the pass left the estimate to the caller's
   // paths (settings.uniform_from_paths); empty when it left none.
   std::vector<uint8_t> from_paths;

@@ -254,9 +254,8 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
 
 // ---- Emitters ----
 
-bool FrameScene::emitter_bounds(std::vector<Bounds3f>* bounds) const {
-  bounds->clear();
-  if (has_environment()) return false;
+std::vector<Bounds3f> FrameScene::area_emitter_bounds() const {
+  std::vector<Bounds3f> bounds;
   for (const Emitter& em : scene_.emitters) {
     if (em.type != EmitterType::kArea) continue;
     const ShapeState& s = shapes_[size_t(em.shape)];
@@ -267,9 +266,9 @@ bool FrameScene::emitter_bounds(std::vector<Bounds3f>* bounds) const {
     } else {
       for (Vec3f p : s.mesh->positions) b.expand(s.instanced ? s.to_world.point(p) : p);
     }
-    bounds->push_back(b);
+    bounds.push_back(b);
   }
-  return true;
+  return bounds;
 }
 
 EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref, float u_select, Vec2f u) const {

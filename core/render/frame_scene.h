@@ -66,11 +66,10 @@ class FrameScene {
   // Radiance arriving along a ray that escaped the scene.
   Rgb eval_environment(Vec3f d) const;
   int emitter_of_shape(int shape) const { return scene_.shapes[size_t(shape)].emitter; }
-  // Where a ray can see emission: false when it can arrive from any direction
-  // (an environment emitter); otherwise true, with the world bounds of every
-  // area emitter's shape at this frame in `bounds` (point, spot and
-  // directional lights are never hit by a ray).
-  bool emitter_bounds(std::vector<Bounds3f>* bounds) const;
+  // The world bounds of every area emitter's shape at this frame: where a ray
+  // can see emission, apart from the environment (has_environment(); point,
+  // spot and directional lights are never hit by a ray).
+  std::vector<Bounds3f> area_emitter_bounds() const;
 
  private:
   struct ShapeState {
