@@ -8,7 +8,8 @@
 //
 //   gdvr-bench-gpt [--scenes cbox,veach-mis,matpreview] [--runs 3] [--spp 8]
 //                  [--budgets 2,4,8] [--threads 2] [--no-cost] [--no-quality] [--default-only]
-//                  [--quality-shift reconnect] [--source-dir DIR]
+//                  [--quality-shift reconnect] [--own-sub-pixel-positions] [--seed N]
+//                  [--source-dir DIR]
 // Run from the repository root (or set GDVR_SOURCE_DIR / --source-dir).
 #include <algorithm>
 #include <chrono>
@@ -51,6 +52,8 @@ struct Args {
   bool cost = true, quality = true;
   bool default_only = false;  // cost of the default configuration only (reconnect, cached RR on)
   ShiftMapping quality_shift = ShiftMapping::kReconnect;
+  bool own_positions = false;  // quality with GptSettings::shared_jitter off
+  uint64_t quality_seed = 1234;
   std::string source_dir = std::getenv("GDVR_SOURCE_DIR") ? std::getenv("GDVR_SOURCE_DIR") : ".";
 };
 
@@ -195,13 +198,14 @@ void run_quality(const Args& a, const BenchScene& bs, Loaded& l) {
     FrameRenderSettings rs = l.render;
     rs.spp = 1;
     rs.time_budget_s = budget;
-    rs.seed = 1234;
+    rs.seed = a.quality_seed;
     auto pt = render_frame_pt(*l.scene, rs, 0, {});
     if (!pt.ok()) std::exit(1);
     const double pt_pp = rel_mse_per_pixel(pt->color, l.reference), pt_gl = rel_mse_global(pt->color, l.reference);
     for (bool rr : {true, false}) {
       GptSettings g = GptSettings::defaults_for(a.quality_shift);
       g.cached_rr = rr;
+      g.shared_jitter = !a.own_positions;
       auto r = render_frame_gpt(*l.scene, with_direct_pass(rs), g, 0, {});
       if (!r.ok()) std::exit(1);
       std::printf("quality %s budget %.1f s: PT %d spp relMSE %.5f (global %.5f) | G-PT %s cached_rr=%s %d spp in "
@@ -258,6 +262,8 @@ int main(int argc, char** argv) {
     } else if (s == "--no-cost") a.cost = false;
     else if (s == "--no-quality") a.quality = false;
     else if (s == "--default-only") a.default_only = true;
+    else if (s == "--own-sub-pixel-positions") a.own_positions = true;
+    else if (s == "--seed") a.quality_seed = std::stoull(next());
     else if (s == "--source-dir") a.source_dir = next();
     else if (s == "--quality-shift") {
       auto m = parse_shift_mapping(next());

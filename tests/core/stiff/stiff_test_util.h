@@ -91,6 +91,7 @@ struct StiffCase {
   double scale = 1;  // scene scale (camera motion of the tgpt animation scales with it)
   bool black = false;  // analytic answer: every layer exactly zero
   double uniform = 0;  // > 0: analytic answer, this radiance in every pixel (the reference)
+  int seeds = 2;  // per budget in the convergence check (more for heavy-tailed cases)
 };
 
 inline std::vector<StiffCase> stiff_cases() {
@@ -108,7 +109,10 @@ inline std::vector<StiffCase> stiff_cases() {
   v.push_back({"degenerate_mesh", "degenerate.xml", {}, 16, 8, 512});
   // Le (1 - rho^1000) / (1 - rho), rho = 0.99: a PT reference would be noisier than G-PT at 128 spp.
   v.push_back({"furnace_depth1000", "furnace.xml", {}, 16, 8, 0, 1, false, (1.0 - std::pow(0.99, 1000)) / 0.01});
-  v.push_back({"hdr_sun_envmap", "envmap_sun.xml", {}, 16, 8, 512});
+  // A sun 1e5 times the sky: the gradient methods' L2 error is heavy-tailed (the
+  // solve spreads a firefly over the image; two seeds per budget read anything
+  // from a 0.01 to a 1.3 ratio), so the convergence check averages 8 seeds.
+  v.push_back({"hdr_sun_envmap", "envmap_sun.xml", {}, 16, 8, 512, 1, false, 0, 8});
   v.push_back({"all_shifts_fail", "checker.xml", {}, 16, 8, 256});
   return v;
 }
