@@ -55,10 +55,16 @@ struct TgptSettings {
   // docs/gpt.md measured that RR multiplies the gradient variance ~13× on cbox
   // and that L2 at equal time is 1.6× better without it (0.00068 vs 0.00112);
   // T-GPT reconstructs with L2 by default and its dxdt, dydt inherit the
-  // spatial gradients' noise.
+  // spatial gradients' noise. Per-pixel sub-pixel positions too: with the
+  // shared position (GptSettings::shared_jitter) the demo shot's relMSE was
+  // 27 % higher at equal spp (0.00102 vs 0.00080, gdvr-bench-tgpt, 12-02),
+  // more than the 4-14 % it saves in time: the two generations of a pair
+  // share their first hits, and the anti-aliasing error, correlated between
+  // neighbours, is low-frequency error the L2 solve takes from the primal.
   static GptSettings gpt_defaults_for(ShiftMapping shift) {
     GptSettings g = GptSettings::defaults_for(shift);
     g.cached_rr = false;
+    g.shared_jitter = false;
     return g;
   }
 
