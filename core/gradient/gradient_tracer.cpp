@@ -74,19 +74,16 @@ void GradientTracer::sample(int x, int y, GradientSample* out) {
   for (int o = 0; o < kOffsetCount; ++o) {
     const int nx = x + kOffsetDx[size_t(o)], ny = y + kOffsetDy[size_t(o)];
     if (nx < 0 || ny < 0 || nx >= width_ || ny >= height_) continue;
+    const auto offset_ray = [&] { return camera_.generate_ray({float(nx) + jitter.x, float(ny) + jitter.y}); };
+    const bool replay_prefix = settings_.shift == ShiftMapping::kHybrid;
     ShiftResult r;
     if (settings_.shift == ShiftMapping::kReplay) {
       // Replay re-traces the whole offset path from its camera ray (trace_path).
-      const Ray offset_ray = camera_.generate_ray({float(nx) + jitter.x, float(ny) + jitter.y});
-      r = replay_shift(scene_, path_, base_, offset_ray, after_camera, counters_);
+      r = replay_shift(scene_, path_, base_, offset_ray(), after_camera, counters_);
+    } else if (shared) {
+      r = shift_from_cache(scene_, settings_, base_, camera_hits_.at(nx, ny, counters_), replay_prefix, counters_);
     } else {
-      const bool replay_prefix = settings_.shift == ShiftMapping::kHybrid;
-      if (shared) {
-        r = shift_from_cache(scene_, settings_, base_, camera_hits_.at(nx, ny, counters_), replay_prefix, counters_);
-      } else {
-        const Ray offset_ray = camera_.generate_ray({float(nx) + jitter.x, float(ny) + jitter.y});
-        r = shift_from_cache(scene_, settings_, base_, offset_ray, replay_prefix, counters_);
-      }
+      r = shift_from_cache(scene_, settings_, base_, offset_ray(), replay_prefix, counters_);
     }
     // Right/down estimate I(j) - I(p); left/up slots hold I(p) - I(j) (film convention).
     const float sign = (o == int(OffsetDir::kRight) || o == int(OffsetDir::kDown)) ? 1.0f : -1.0f;

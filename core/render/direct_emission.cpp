@@ -120,8 +120,9 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
   // the corners differ (an environment seen through a gap narrower than a
   // pixel can then slip between them: the pixel is left with fewer strata,
   // still unbiased) ----
+  auto pixel = [&](int x, int y) { return size_t(y) * size_t(width) + size_t(x); };
   const std::vector<Reach> reach = emitter_reach(scene, camera, width, height, settings.use_emitter_bounds);
-  auto reach_at = [&](int x, int y) { return reach[size_t(y) * size_t(width) + size_t(x)]; };
+  auto reach_at = [&](int x, int y) { return reach[pixel(x, y)]; };
   const bool adaptive = settings.edge_strata > settings.strata;
   ProbeGrid probes(adaptive ? width : 0, adaptive ? height : 0);
   std::vector<uint8_t> probed(size_t(probes.nx()) * size_t(probes.ny()), 0);
@@ -165,12 +166,12 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
         const float c = probes.at(2 * x, 2 * y);
         const bool differ = probes.at(2 * x + 2, 2 * y) != c || probes.at(2 * x, 2 * y + 2) != c ||
                             probes.at(2 * x + 2, 2 * y + 2) != c;
-        refine[size_t(y) * size_t(width) + size_t(x)] = differ;
+        refine[pixel(x, y)] = differ;
         any_refine = any_refine || differ;
       }
     if (any_refine) {
       st = run_probes([&](int i, int j) {
-        return any_owner(i, j, [&](int x, int y) { return refine[size_t(y) * size_t(width) + size_t(x)] != 0; });
+        return any_owner(i, j, [&](int x, int y) { return refine[pixel(x, y)] != 0; });
       });
       if (!st.ok()) return st;
     }
@@ -188,12 +189,12 @@ Expected<DirectEmissionResult> render_direct_emission(const FrameScene& scene, c
           ++tile_culled;  // out.direct is already 0 there
           continue;
         }
-        const bool corners_agree = r == Reach::kEnvironment && !refine[size_t(y) * size_t(width) + size_t(x)];
+        const bool corners_agree = r == Reach::kEnvironment && !refine[pixel(x, y)];
         const ProbeGrid::Variation var = !adaptive       ? ProbeGrid::Variation::kSmooth
                                          : corners_agree ? ProbeGrid::Variation::kUniform
                                                          : probes.variation(x, y);
         if (var == ProbeGrid::Variation::kUniform && settings.uniform_from_paths) {
-          out.from_paths[size_t(y) * size_t(width) + size_t(x)] = 1;
+          out.from_paths[pixel(x, y)] = 1;
           continue;
         }
         const int k = var == ProbeGrid::Variation::kEdge      ? settings.edge_strata
