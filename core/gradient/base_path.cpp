@@ -129,6 +129,15 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
     left.next = PathNext::kSurface;
   }
 
+  // dark_suffix, from the end of the path backwards.
+  bool dark_after = true;  // nothing from x_{k+1} on (emission included)
+  for (size_t k = rec.v.size(); k-- > 0;) {
+    PathVertex& v = rec.v[k];
+    const bool lit_here = (v.has_nee && v.nee_visible) || (v.next == PathNext::kEscaped && !v.escape_le.is_black());
+    v.dark_suffix = dark_after && !lit_here;
+    dark_after = v.dark_suffix && v.le.is_black();
+  }
+
   if (!is_finite(rec.indirect) || !is_finite(rec.direct)) {
     ++counters.invalid_samples;
     rec.clear();

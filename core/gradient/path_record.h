@@ -62,6 +62,14 @@ struct PathVertex {
   // at the same vertex, so the first computes it and the others reuse it; a
   // record belongs to one tracer, so the cache is never shared across threads.
   mutable float reconnect_pdf = -1.0f;
+  // No technique from x_k on can contribute, for the base or for an offset
+  // reconnected into x_k: no visible light sample at x_k or after it, no
+  // emission at x_{k+1} or after it, no environment radiance where the path
+  // escapes (set by trace_base_path). The emission of x_k itself is not
+  // included: seen from the offset's vertex it is evaluated anew. A shift that
+  // would reconnect into such a vertex can skip its visibility ray: whatever
+  // it finds, every later technique adds w (0 - 0).
+  bool dark_suffix = false;
 };
 
 struct PathRecord {

@@ -149,6 +149,12 @@ ShiftResult CachedShift::run(const CameraHit& offset_first) {
     const bool diffuse_b = diffuse_for(bsdf_b, v.bs), diffuse_o = diffuse_for(bsdf_o, v.bs);
     const bool diffuse_y = escaped || diffuse_next(desc_.bsdfs[size_t(nv->bsdf)], *nv);
     if (diffuse_b && diffuse_o && diffuse_y) {
+      // Nothing after the reconnection can contribute, whatever its visibility
+      // ray finds (PathVertex::dark_suffix): the ray is not traced. Kept in
+      // traced runs, whose record and ratios the invertibility tests read.
+      const bool dark_rest = escaped ? v.escape_le.is_black()
+                                     : nv->dark_suffix && scene_.emitter_of_shape(nv->si.shape) < 0;
+      if (dark_rest && !trace_) return acc_.result();
       Vec3f dir;
       float jacobian = 1.0f;
       Ray connect;
