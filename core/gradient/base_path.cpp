@@ -5,6 +5,17 @@
 
 namespace gdvr {
 
+void mark_dark_suffixes(PathRecord* record) {
+  // From the end of the path backwards.
+  bool dark_after = true;  // nothing from x_{k+1} on (emission included)
+  for (size_t k = record->v.size(); k-- > 0;) {
+    PathVertex& v = record->v[k];
+    const bool lit_here = (v.has_nee && v.nee_visible) || (v.next == PathNext::kEscaped && !v.escape_le.is_black());
+    v.dark_suffix = dark_after && !lit_here;
+    dark_after = v.dark_suffix && v.le.is_black();
+  }
+}
+
 void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const CameraHit& first,
                      Sampler& sampler, PathCounters& counters, PathRecord* record) {
   const Scene& desc = scene.scene();
@@ -71,10 +82,8 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
         v.nee_f = be.value;
         v.w_nee = es.delta ? 1.0f : mis_power(es.pdf, be.pdf);
         if (!be.value.is_black()) {
-          Ray shadow = si.spawn_ray(es.d);
-          shadow.tmax = std::isinf(es.dist) ? kInfinity : es.dist * (1.0f - kShadowEpsilon);
           ++counters.rays;
-          v.nee_visible = !scene.occluded(shadow);
+          v.nee_visible = !scene.occluded(shadow_ray(si, es));
           if (v.nee_visible) {
             v.nee = beta * be.value * es.weight * v.w_nee;
             rec.indirect += v.nee;
@@ -129,14 +138,7 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
     left.next = PathNext::kSurface;
   }
 
-  // dark_suffix, from the end of the path backwards.
-  bool dark_after = true;  // nothing from x_{k+1} on (emission included)
-  for (size_t k = rec.v.size(); k-- > 0;) {
-    PathVertex& v = rec.v[k];
-    const bool lit_here = (v.has_nee && v.nee_visible) || (v.next == PathNext::kEscaped && !v.escape_le.is_black());
-    v.dark_suffix = dark_after && !lit_here;
-    dark_after = v.dark_suffix && v.le.is_black();
-  }
+  mark_dark_suffixes(&rec);
 
   if (!is_finite(rec.indirect) || !is_finite(rec.direct)) {
     ++counters.invalid_samples;

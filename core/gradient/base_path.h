@@ -18,6 +18,10 @@ namespace gdvr {
 void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const CameraHit& first,
                      Sampler& sampler, PathCounters& counters, PathRecord* record);
 
+// Sets every vertex's PathVertex::dark_suffix from the record's contributions
+// (trace_base_path calls it; tests call it after editing a record).
+void mark_dark_suffixes(PathRecord* record);
+
 // The same, tracing the camera ray itself.
 inline void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const Ray& camera_ray,
                             Sampler& sampler, PathCounters& counters, PathRecord* record) {

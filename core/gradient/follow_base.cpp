@@ -73,10 +73,8 @@ Rgb offset_emitter_sampling(const FrameScene& scene, const SurfaceInteraction& s
   if (eo.weight.is_black()) return Rgb(0.0f);
   BsdfEval be = bsdf_eval_pdf(bsdf_o, so.uv, so.wi, so.sh_frame.to_local(eo.d));
   if (be.value.is_black()) return Rgb(0.0f);
-  Ray shadow = so.spawn_ray(eo.d);
-  shadow.tmax = std::isinf(eo.dist) ? kInfinity : eo.dist * (1.0f - kShadowEpsilon);
   ++counters.rays;
-  if (scene.occluded(shadow)) return Rgb(0.0f);
+  if (scene.occluded(shadow_ray(so, eo))) return Rgb(0.0f);
   const float w = eo.delta ? 1.0f : mis_power(eo.pdf, be.pdf);
   return beta * be.value * eo.weight * w;
 }

@@ -41,6 +41,11 @@ struct PathVertex {
   Rgb nee_f;              // f(wo, wl) |cos| at x_k
   float w_nee = 0;        // base MIS weight
   Rgb nee;                // beta * nee_f * es.weight * w_nee (0 when occluded)
+  // The light sample carries radiance but the base's BSDF value towards it
+  // was zero, so the base traced no shadow ray: nee_visible says nothing. An
+  // offset that reaches x_k along another direction may see a nonzero value
+  // and must then test the ray itself.
+  bool shadow_untested() const { return has_nee && !es.weight.is_black() && nee_f.is_black(); }
 
   // ---- BSDF sampling at x_k ----
   PathNext next = PathNext::kEnd;
@@ -65,10 +70,11 @@ struct PathVertex {
   // No technique from x_k on can contribute, for the base or for an offset
   // reconnected into x_k: no visible light sample at x_k or after it, no
   // emission at x_{k+1} or after it, no environment radiance where the path
-  // escapes (set by trace_base_path). The emission of x_k itself is not
-  // included: seen from the offset's vertex it is evaluated anew. A shift that
-  // would reconnect into such a vertex can skip its visibility ray: whatever
-  // it finds, every later technique adds w (0 - 0).
+  // escapes (set by trace_base_path). Two things depend on the offset's
+  // direction into x_k and are not included: x_k's own emission, and an
+  // untested light sample at x_k (shadow_untested). A shift that would
+  // reconnect into such a vertex, having checked those two, can skip its
+  // visibility ray: whatever it finds, every later technique adds w (0 - 0).
   bool dark_suffix = false;
 };
 

@@ -43,6 +43,21 @@ class CachedShift {
   }
 
   void technique(Rgb c_b, Rgb c_o, double ratio) { acc_.technique(c_b, c_o, ratio); }
+  // Whether an offset arriving at the base vertex y along `dir` can get no
+  // contribution from y on (PathVertex::dark_suffix), with the two parts that
+  // depend on its direction checked here: y's own emission, and y's light
+  // sample where the base's BSDF value was zero.
+  bool dark_after_reconnecting(const PathVertex& y, Vec3f dir) const {
+    if (!y.dark_suffix || scene_.emitter_of_shape(y.si.shape) >= 0) return false;
+    if (!y.shadow_untested()) return true;
+    const Bsdf& b = desc_.bsdfs[size_t(y.bsdf)];
+    return bsdf_eval_pdf(b, y.si.uv, y.si.sh_frame.to_local(-dir), y.si.sh_frame.to_local(y.es.d)).value.is_black();
+  }
+  // The base vertex's light sample, visible from it (the shadow ray the base skipped).
+  bool light_visible_from(const PathVertex& v) {
+    ++counters_.rays;
+    return !scene_.occluded(shadow_ray(v.si, v.es));
+  }
   void fail_from(size_t i, bool with_nee) { acc_.fail_from(i, with_nee); }
   PathVertex* record(const SurfaceInteraction& si, const PathVertex& base_vertex) {
     if (!trace_) return nullptr;
@@ -99,11 +114,15 @@ ShiftResult CachedShift::run(const CameraHit& offset_first) {
       if (state == OffsetState::kReconnected) {
         if (v.nee_visible) c_o = beta * v.nee_f * v.es.weight * v.w_nee;
       } else if (state == OffsetState::kJustReconnected) {
-        // Same point, same light sample, same shadow ray; only the incoming direction differs.
-        if (v.nee_visible && !v.es.weight.is_black()) {
+        // Same point, same light sample, same shadow ray; only the incoming
+        // direction differs. Where the base's BSDF value was zero it traced no
+        // shadow ray, and the offset's value need not be zero: it tests the ray.
+        if ((v.nee_visible || v.shadow_untested()) && !v.es.weight.is_black()) {
           BsdfEval be = bsdf_eval_pdf(bsdf_b, v.si.uv, wo_reconnected, v.si.sh_frame.to_local(v.es.d));
-          float w = v.es.delta ? 1.0f : mis_power(v.es.pdf, be.pdf);
-          c_o = beta * be.value * v.es.weight * w;
+          if (!be.value.is_black() && (v.nee_visible || light_visible_from(v))) {
+            float w = v.es.delta ? 1.0f : mis_power(v.es.pdf, be.pdf);
+            c_o = beta * be.value * v.es.weight * w;
+          }
         }
       } else {
         if (rec && !bsdf_o.is_delta_only()) rec->es = scene_.sample_emitter_direction(so, v.u_select, v.u_light);
@@ -149,12 +168,6 @@ ShiftResult CachedShift::run(const CameraHit& offset_first) {
     const bool diffuse_b = diffuse_for(bsdf_b, v.bs), diffuse_o = diffuse_for(bsdf_o, v.bs);
     const bool diffuse_y = escaped || diffuse_next(desc_.bsdfs[size_t(nv->bsdf)], *nv);
     if (diffuse_b && diffuse_o && diffuse_y) {
-      // Nothing after the reconnection can contribute, whatever its visibility
-      // ray finds (PathVertex::dark_suffix): the ray is not traced. Kept in
-      // traced runs, whose record and ratios the invertibility tests read.
-      const bool dark_rest = escaped ? v.escape_le.is_black()
-                                     : nv->dark_suffix && scene_.emitter_of_shape(nv->si.shape) < 0;
-      if (dark_rest && !trace_) return acc_.result();
       Vec3f dir;
       float jacobian = 1.0f;
       Ray connect;
@@ -183,6 +196,10 @@ ShiftResult CachedShift::run(const CameraHit& offset_first) {
         jacobian = (cos_o / cos_b) * (dist2_base / dist2);
         connect = so.spawn_ray_to(nv->si);
       }
+      // Nothing after the reconnection can contribute, whatever its visibility
+      // ray finds: the ray is not traced. Kept in traced runs, whose record
+      // and ratios the invertibility tests read.
+      if (!trace_ && (escaped ? v.escape_le.is_black() : dark_after_reconnecting(*nv, dir))) return acc_.result();
       ++counters_.rays;
       if (scene_.occluded(connect)) {
         fail_from(i, false);

@@ -25,6 +25,14 @@ struct EmitterSample {
   int emitter = -1;
 };
 
+// The shadow ray from `si` towards the sampled emitter point, stopping short
+// of it (unbounded for an emitter at infinity).
+inline Ray shadow_ray(const SurfaceInteraction& si, const EmitterSample& es) {
+  Ray shadow = si.spawn_ray(es.d);
+  shadow.tmax = std::isinf(es.dist) ? kInfinity : es.dist * (1.0f - kShadowEpsilon);
+  return shadow;
+}
+
 class FrameScene {
  public:
   // `animated_shapes[i]` marks shapes whose transform changes during the job

@@ -58,8 +58,7 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
         BsdfEval be = bsdf_eval_pdf(bsdf, si.uv, wo, wi_local);
         const Rgb& f = be.value;
         if (!f.is_black()) {
-          Ray shadow = si.spawn_ray(es.d);
-          shadow.tmax = std::isinf(es.dist) ? kInfinity : es.dist * (1.0f - kShadowEpsilon);
+          const Ray shadow = shadow_ray(si, es);
           ++counters.rays;
           if (counters.ray_log) counters.ray_log->push_back({shadow, true});
           if (!scene.occluded(shadow)) {
