@@ -19,7 +19,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
 
   PerspectiveCamera camera(scene.scene().camera, w, h);
-  GradientFilm film(w, h, temporal != nullptr);
+  GradientFilm film(w, h, temporal != nullptr, gpt.pair_primal);
   std::atomic<uint64_t> rays{0}, invalid{0}, shifts{0}, failures{0}, temporal_rays{0};
   int spp_done = 0;
 
@@ -74,6 +74,13 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
 
   GptFrameResult result;
   result.buffers = film.resolve(spp_done);
+  if (gpt.pair_primal) {
+    // The reconstruction (and the `primal` layer) get the pair primal.
+    result.buffers.primal = std::move(result.buffers.pair_primal);
+    result.buffers.primal_var = std::move(result.buffers.pair_primal_var);
+    result.buffers.pair_primal = Image();
+    result.buffers.pair_primal_var = Image();
+  }
   if (!direct->direct.empty()) result.buffers.direct = merge_direct_estimates(std::move(*direct), result.buffers.direct);
   result.spp = spp_done;
   result.rays = rays;

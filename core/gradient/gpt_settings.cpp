@@ -42,6 +42,7 @@ std::string GptSettings::to_string() const {
   std::ostringstream os;
   os << "shift=" << shift_mapping_name(shift) << " cached_rr=" << (cached_rr ? "on" : "off")
      << " q_min=" << cached_rr_min_q << " shared_jitter=" << (shared_jitter ? "on" : "off")
+     << " pair_primal=" << (pair_primal ? "on" : "off")
      << " diffuse_roughness=" << diffuse_roughness << " mis_epsilon=" << mis_epsilon
      << " recon=" << recon_method_name(recon.method) << " alpha=" << recon.alpha;
   return os.str();

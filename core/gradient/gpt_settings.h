@@ -36,6 +36,12 @@ struct GptSettings {
   // per pixel, as PT's (the base paths are then exactly PT's paths for the
   // same seed; with it on, only their camera rays differ).
   bool shared_jitter = true;
+  // The primal the reconstruction gets: false, the base path's plain estimate
+  // (PT's estimator); true, the MIS-weighted pair primal (Kettunen et al.
+  // 2015): for each neighbour j, the pair's two generations' weighted
+  // estimates of I(p), averaged over the neighbours (GradientFilm). Under
+  // cached-path RR it is kept unbiased with 1/q terms.
+  bool pair_primal = false;
   // A vertex whose BSDF roughness exceeds this is "diffuse" (reconnectable);
   // otherwise glossy/specular (half-vector copy). 0.001 in the G-PT release.
   float diffuse_roughness = 0.001f;

@@ -6,7 +6,10 @@
 // count or tile order: dx(p) = right(p) + left(p + e_x), dy(p) = down(p) +
 // up(p + e_y), each side being one MIS-weighted generation of the pair
 // (Kettunen et al. 2015, Eq. 6). The primal is the base path's plain estimate
-// (docs/gpt.md explains the choice). Sums are split by sample-index parity
+// by default (docs/gpt.md explains the choice) or the MIS-weighted pair
+// primal: the mean over the pixel's neighbours j of the pair (p, j)'s two
+// generations' weighted estimates of I(p), each pixel again owning the sums
+// its own samples made. Sums are split by sample-index parity
 // into two half buffers, whose difference gives per-pixel variances.
 #pragma once
 
@@ -30,6 +33,11 @@ struct GradientSample {
   Rgb direct;                               // emitters seen directly from the camera
   std::array<Rgb, kOffsetCount> gradient;   // towards I(neighbour) - I(p) for right/down, I(p) - I(neighbour) for left/up
   int shifts = 0, failures = 0;             // offsets attempted and failed
+  // The pair primal (GptSettings::pair_primal), per offset direction: this
+  // pixel's own estimate weighted for the pair with that neighbour, and the
+  // estimate its offset adds to the neighbour (both corrected for the
+  // cached-path roulette, see GradientTracer::sample).
+  std::array<Rgb, kOffsetCount> pair_base, pair_offset;
   // The temporal path-space shift into another frame t' (when enabled): this
   // generation's estimate of I_t'(p) - I_t(p), and whether the shift failed.
   Rgb temporal;
@@ -40,6 +48,9 @@ struct GradientFilmBuffers {
   Image primal, dx, dy, direct;             // means, RGB
   Image primal_var, dx_var, dy_var;         // variance of the means, RGB, from the half buffers
   Image shift_failure_rate;                 // one channel: failed / attempted offsets
+  // Only with the pair primal (GradientFilm(w, h, t, true)): its mean and the
+  // variance of the mean; gpt_integrator puts them in place of primal.
+  Image pair_primal, pair_primal_var;
   // Only with a temporal target (GradientFilm(w, h, true)): the mean of
   // GradientSample::temporal, its variance, and the failed fraction.
   Image temporal, temporal_var, temporal_failure_rate;
@@ -48,8 +59,10 @@ struct GradientFilmBuffers {
 class GradientFilm {
  public:
   GradientFilm() = default;
-  GradientFilm(int width, int height, bool temporal = false)
-      : width_(width), height_(height), temporal_(temporal), pixels_(size_t(width) * height) {}
+  GradientFilm(int width, int height, bool temporal = false, bool pair_primal = false)
+      : width_(width), height_(height), temporal_(temporal), pixels_(size_t(width) * height) {
+    if (pair_primal) pairs_.resize(pixels_.size());
+  }
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -70,9 +83,18 @@ class GradientFilm {
     double temporal[3] = {0, 0, 0}, temporal_a[3] = {0, 0, 0};
     uint32_t temporal_failures = 0;
   };
+  // The pair primal's sums (allocated only when it is on): the pixel's own
+  // weighted estimates summed over its existing neighbours, and per direction
+  // what its offsets add to each neighbour; both with half-A copies.
+  struct PairSums {
+    double base[3] = {0, 0, 0}, base_a[3] = {0, 0, 0};
+    double into[kOffsetCount][3] = {}, into_a[kOffsetCount][3] = {};
+  };
+  void resolve_pair_primal(int spp, GradientFilmBuffers* b) const;
   int width_ = 0, height_ = 0;
   bool temporal_ = false;
   std::vector<Sums> pixels_;
+  std::vector<PairSums> pairs_;
 };
 
 }  // namespace gdvr

@@ -44,6 +44,9 @@ void GradientTracer::sample(int x, int y, GradientSample* out) {
   if (base_.invalid) return;
   out->primal = base_.indirect;
   out->direct = base_.direct;
+  // The pair primal where no shift is made (the roulette said no, or no
+  // neighbour): the base's own estimate, nothing into the neighbour.
+  out->pair_base.fill(base_.indirect);
 
   // ---- The temporal offset (every base path: no cached-path roulette) ----
   if (temporal_) {
@@ -93,6 +96,14 @@ void GradientTracer::sample(int x, int y, GradientSample* out) {
       g = Rgb(0.0f);
     }
     out->gradient[size_t(o)] = g;
+    // The pair primal under the roulette: A - (A - B) / q estimates B (the
+    // base's weighted share) and C / q the offset's, C = Σ w c_o; both are
+    // what the pair's weights give when the shift is always made.
+    const Rgb a = base_.indirect;
+    Rgb pb = a - (a - r.base_weighted) * inv_q, po = r.offset_primal * inv_q;
+    if (!is_finite(pb) || !is_finite(po)) pb = a, po = Rgb(0.0f);  // (the gradient check above counts it)
+    out->pair_base[size_t(o)] = pb;
+    out->pair_offset[size_t(o)] = po;
     ++out->shifts;
     if (r.failed) ++out->failures;
   }

@@ -10,6 +10,7 @@ ShiftResult replay_shift(const FrameScene& scene, const PathTracerSettings& path
   constexpr float kW = 0.5f;
   Rgb offset_indirect = offset.radiance - offset.direct;
   r.offset_primal = offset_indirect * kW;
+  r.base_weighted = base.indirect * kW;
   r.gradient = (offset_indirect - base.indirect) * kW;
   return r;
 }

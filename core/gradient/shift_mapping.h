@@ -17,7 +17,8 @@ namespace gdvr {
 
 struct ShiftResult {
   Rgb gradient;        // Σ_t w_t (c_o,t - c_b,t): this generation's estimate of I_j - I_i (indirect part)
-  Rgb offset_primal;   // Σ_t w_t c_o,t (diagnostic)
+  Rgb offset_primal;   // Σ_t w_t c_o,t: this generation's share of the neighbour's estimate
+  Rgb base_weighted;   // Σ_t w_t c_b,t: its share of the base pixel's own estimate (the pair primal)
   bool failed = false; // some technique's shift failed (counted per pixel)
 };
 
@@ -51,8 +52,10 @@ class ShiftAccumulator {
     if (w == 0.0) return;
     Rgb wc_o = w == 1.0 ? Rgb(0.0f) : c_o * float(w);
     if (!is_finite(wc_o)) wc_o = Rgb(0.0f);
+    const Rgb wc_b = c_b * float(w);
     result_.offset_primal += wc_o;
-    result_.gradient += wc_o - c_b * float(w);
+    result_.base_weighted += wc_b;
+    result_.gradient += wc_o - wc_b;
   }
   // Failure at base vertex i: its later techniques (and its own emitter
   // sampling when `with_nee`) become finite differences.

@@ -9,6 +9,7 @@
 //   gdvr-bench-gpt [--scenes cbox,veach-mis,matpreview] [--runs 3] [--spp 8]
 //                  [--budgets 2,4,8] [--threads 2] [--no-cost] [--no-quality] [--default-only]
 //                  [--quality-shift reconnect] [--own-sub-pixel-positions] [--seed N]
+//                  [--pair-primal]
 //                  [--source-dir DIR]
 // Run from the repository root (or set GDVR_SOURCE_DIR / --source-dir).
 #include <algorithm>
@@ -53,6 +54,7 @@ struct Args {
   bool default_only = false;  // cost of the default configuration only (reconnect, cached RR on)
   ShiftMapping quality_shift = ShiftMapping::kReconnect;
   bool own_positions = false;  // quality with GptSettings::shared_jitter off
+  bool pair_primal = false;    // quality: also the same samples with GptSettings::pair_primal
   uint64_t quality_seed = 1234;
   std::string source_dir = std::getenv("GDVR_SOURCE_DIR") ? std::getenv("GDVR_SOURCE_DIR") : ".";
 };
@@ -193,6 +195,32 @@ void run_cost(const Args& a, const BenchScene& bs, Loaded& l) {
   std::fflush(stdout);
 }
 
+// Primal, L2, L1 and weighted relMSE of one G-PT frame against the reference,
+// and L2's predicted against achieved improvement over the primal (§6).
+void report_quality(const GptFrameResult& r, const Image& reference, double pt_pp, double pt_gl) {
+  Image primal = r.buffers.primal;
+  for (size_t k = 0; k < primal.data().size(); ++k) primal.data()[k] += r.buffers.direct.data()[k];
+  const double primal_pp = rel_mse_per_pixel(primal, reference);
+  std::printf("  primal      relMSE %.5f (global %.5f)\n", primal_pp, rel_mse_global(primal, reference));
+  double l2_pp = 0;
+  for (ReconMethod m : {ReconMethod::kL2, ReconMethod::kL1, ReconMethod::kWeighted}) {
+    double secs = 0;
+    Image img = reconstruct_final(r, m, &secs);
+    const double pp = rel_mse_per_pixel(img, reference), gl = rel_mse_global(img, reference);
+    if (m == ReconMethod::kL2) l2_pp = pp;
+    std::printf("  %-9s   relMSE %.5f (global %.5f)  PT/G-PT %.2fx (global %.2fx)  solve %.2f s\n",
+                recon_method_name(m), pp, gl, pt_pp / pp, pt_gl / gl, secs);
+  }
+  // Predicted improvement of L2 over the G-PT primal from the measured variances (§6).
+  NoiseLevels noise;
+  noise[Term::kPrimal] = mean_finite(r.buffers.primal_var);
+  noise[Term::kDx] = mean_finite(r.buffers.dx_var);
+  noise[Term::kDy] = mean_finite(r.buffers.dy_var);
+  auto predicted = predicted_improvement(noise, ReconSettings(), /* temporal = */ false);
+  std::printf("  L2 vs primal at equal spp: predicted %.2fx, achieved %.2fx (relMSE)\n",
+              predicted.ok() ? predicted.value() : -1.0, primal_pp / l2_pp);
+}
+
 void run_quality(const Args& a, const BenchScene& bs, Loaded& l) {
   for (double budget : a.budgets) {
     FrameRenderSettings rs = l.render;
@@ -212,27 +240,19 @@ void run_quality(const Args& a, const BenchScene& bs, Loaded& l) {
                   "%.2f s, failure %.3f\n",
                   bs.name.c_str(), budget, pt->spp, pt_pp, pt_gl, shift_mapping_name(a.quality_shift),
                   rr ? "on" : "off", r->spp, r->seconds, r->shift_failure_rate);
-      Image primal = r->buffers.primal;
-      for (size_t k = 0; k < primal.data().size(); ++k) primal.data()[k] += r->buffers.direct.data()[k];
-      const double primal_pp = rel_mse_per_pixel(primal, l.reference);
-      std::printf("  primal      relMSE %.5f (global %.5f)\n", primal_pp, rel_mse_global(primal, l.reference));
-      double l2_pp = 0;
-      for (ReconMethod m : {ReconMethod::kL2, ReconMethod::kL1, ReconMethod::kWeighted}) {
-        double secs = 0;
-        Image img = reconstruct_final(*r, m, &secs);
-        const double pp = rel_mse_per_pixel(img, l.reference), gl = rel_mse_global(img, l.reference);
-        if (m == ReconMethod::kL2) l2_pp = pp;
-        std::printf("  %-9s   relMSE %.5f (global %.5f)  PT/G-PT %.2fx (global %.2fx)  solve %.2f s\n",
-                    recon_method_name(m), pp, gl, pt_pp / pp, pt_gl / gl, secs);
+      report_quality(*r, l.reference, pt_pp, pt_gl);
+      if (a.pair_primal) {
+        // The same samples (same seed and spp, no budget), with the pair primal.
+        GptSettings gp = g;
+        gp.pair_primal = true;
+        FrameRenderSettings fixed = with_direct_pass(rs);
+        fixed.time_budget_s = 0;
+        fixed.spp = r->spp;
+        auto rp = render_frame_gpt(*l.scene, fixed, gp, 0, {});
+        if (!rp.ok()) std::exit(1);
+        std::printf("  -- the same %d spp with the pair primal:\n", rp->spp);
+        report_quality(*rp, l.reference, pt_pp, pt_gl);
       }
-      // Predicted improvement of L2 over the G-PT primal from the measured variances (§6).
-      NoiseLevels noise;
-      noise[Term::kPrimal] = mean_finite(r->buffers.primal_var);
-      noise[Term::kDx] = mean_finite(r->buffers.dx_var);
-      noise[Term::kDy] = mean_finite(r->buffers.dy_var);
-      auto predicted = predicted_improvement(noise, ReconSettings(), /* temporal = */ false);
-      std::printf("  L2 vs primal at equal spp: predicted %.2fx, achieved %.2fx (relMSE)\n",
-                  predicted.ok() ? predicted.value() : -1.0, primal_pp / l2_pp);
       std::fflush(stdout);
     }
   }
@@ -263,6 +283,7 @@ int main(int argc, char** argv) {
     else if (s == "--no-quality") a.quality = false;
     else if (s == "--default-only") a.default_only = true;
     else if (s == "--own-sub-pixel-positions") a.own_positions = true;
+    else if (s == "--pair-primal") a.pair_primal = true;
     else if (s == "--seed") a.quality_seed = std::stoull(next());
     else if (s == "--source-dir") a.source_dir = next();
     else if (s == "--quality-shift") {

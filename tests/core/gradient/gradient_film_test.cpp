@@ -36,5 +36,32 @@ TEST(GradientFilmTest, CombinesBothGenerationsOfAPairAndMeasuresVariance) {
   EXPECT_FLOAT_EQ(out.shift_failure_rate.at(0, 0, 0), 0.25f);
 }
 
+// The pair primal of pixel p: for each neighbour j, p's own weighted share
+// for that pair plus j's offset into p; the mean over the existing neighbours.
+TEST(GradientFilmTest, PairPrimalAveragesEachNeighboursPairEstimate) {
+  GradientFilm film(3, 1, /* temporal = */ false, /* pair_primal = */ true);
+  // Pixel x gets base shares 10x + o (o: direction index) and sends 100x + o
+  // into each neighbour; the plain primal is 1 everywhere.
+  for (int x = 0; x < 3; ++x) {
+    GradientSample s;
+    s.primal = Rgb(1.0f);
+    for (int o = 0; o < kOffsetCount; ++o) {
+      s.pair_base[size_t(o)] = Rgb(float(10 * x + o));
+      s.pair_offset[size_t(o)] = Rgb(float(100 * x + o));
+    }
+    film.add(x, 0, 0, s);
+  }
+  GradientFilmBuffers out = film.resolve(1);
+  ASSERT_FALSE(out.pair_primal.empty());
+  const int right = int(OffsetDir::kRight), left = int(OffsetDir::kLeft);
+  // x = 0: one neighbour (right, x = 1, whose left offset points back).
+  EXPECT_FLOAT_EQ(out.pair_primal.at(0, 0, 0), float(0 + right + 100 + left));
+  // x = 1: both; x = 2: only its left neighbour.
+  EXPECT_FLOAT_EQ(out.pair_primal.at(1, 0, 0), float(((10 + left) + (0 + right) + (10 + right) + (200 + left)) / 2.0));
+  EXPECT_FLOAT_EQ(out.pair_primal.at(2, 0, 0), float(20 + left + 100 + right));
+  EXPECT_FLOAT_EQ(out.primal.at(1, 0, 0), 1.0f);  // the plain primal stays as it was
+  EXPECT_TRUE(GradientFilm(3, 1).resolve(1).pair_primal.empty());  // off: not allocated
+}
+
 }  // namespace
 }  // namespace gdvr
