@@ -81,17 +81,6 @@ float erfinv(float x) {
   return p * x;
 }
 
-Vec2f square_to_uniform_disk_concentric(Vec2f u) {
-  // Shirley & Chiu 1997, in Mitsuba's branch-free form (warp.h).
-  float r1 = 2.0f * u.x - 1.0f, r2 = 2.0f * u.y - 1.0f;
-  if (r1 == 0.0f && r2 == 0.0f) return {0.0f, 0.0f};
-  bool quadrant_1_or_3 = std::abs(r1) < std::abs(r2);
-  float r = quadrant_1_or_3 ? r2 : r1, rp = quadrant_1_or_3 ? r1 : r2;
-  float phi = 0.25f * kPi * rp / r;
-  if (quadrant_1_or_3) phi = 0.5f * kPi - phi;
-  return {r * std::cos(phi), r * std::sin(phi)};
-}
-
 MicrofacetDistribution::MicrofacetDistribution(MicrofacetType t, float au, float av, bool visible)
     : type(t), alpha_u(std::max(au, 1e-4f)), alpha_v(std::max(av, 1e-4f)), sample_visible(visible) {}
 
@@ -178,8 +167,9 @@ std::pair<Vec3f, float> MicrofacetDistribution::sample(Vec3f wi, Vec2f u) const 
   if (!sample_visible) {
     float sin_phi, cos_phi, alpha_2;
     if (is_isotropic()) {
-      sin_phi = std::sin(2.0f * kPi * u.y);
-      cos_phi = std::cos(2.0f * kPi * u.y);
+      const SinCos phi = sincos_turns(u.y);
+      sin_phi = phi.sin;
+      cos_phi = phi.cos;
       alpha_2 = alpha_u * alpha_u;
     } else {
       float ratio = alpha_v / alpha_u, tmp = ratio * std::tan(2.0f * kPi * u.y);

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "core/bsdf/bsdf.h"
+#include "core/math/sampling.h"
 #include "core/math/vec.h"
 
 namespace gdvr {
@@ -45,13 +46,5 @@ float erfinv(float x);
 // Reflectance of the interface for incidence direction wi and relative IOR eta.
 float microfacet_eval_reflectance(const MicrofacetDistribution& distr, Vec3f wi, float eta);
 float microfacet_eval_transmittance(const MicrofacetDistribution& distr, Vec3f wi, float eta);
-
-// Mitsuba's warps (core/warp.h), shared by the BSDFs and their tests.
-Vec2f square_to_uniform_disk_concentric(Vec2f u);
-inline Vec3f square_to_cosine_hemisphere(Vec2f u) {
-  Vec2f p = square_to_uniform_disk_concentric(u);
-  return {p.x, p.y, safe_sqrt(1.0f - p.x * p.x - p.y * p.y)};
-}
-inline float square_to_cosine_hemisphere_pdf(Vec3f v) { return kInvPi * v.z; }
 
 }  // namespace gdvr

@@ -29,6 +29,7 @@ class Image {
     const float* p = &data_[(size_t(y) * width_ + x) * channels_];
     return {p[0], p[1], p[2]};
   }
+  void prefetch_rgb(int x, int y) const { __builtin_prefetch(&data_[(size_t(y) * width_ + x) * channels_]); }
   void set_rgb(int x, int y, Rgb c) {
     float* p = &data_[(size_t(y) * width_ + x) * channels_];
     p[0] = c.r; p[1] = c.g; p[2] = c.b;

@@ -83,6 +83,14 @@ Vec2f Distribution2D::sample(Vec2f u, float* pdf) const {
   return {(float(x.index) + x.u_remapped) / float(width_), (float(y.index) + y.u_remapped) / float(height_)};
 }
 
+Vec2f Distribution2D::prefetch_sample(Vec2f u) const {
+  if (empty()) return {0.0f, 0.0f};
+  const AliasSample y = sample_alias(marginal_.data(), marginal_.size(), u.y);
+  const size_t x = std::min(size_t(width_) - 1, size_t(u.x * float(width_)));
+  __builtin_prefetch(&rows_[y.index * size_t(width_) + x]);
+  return {(float(x) + 0.5f) / float(width_), (float(y.index) + y.u_remapped) / float(height_)};
+}
+
 float Distribution2D::pdf(Vec2f p) const {
   if (empty()) return 0.0f;
   const size_t x = size_t(std::clamp(int(p.x * width_), 0, width_ - 1));

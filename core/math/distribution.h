@@ -47,6 +47,11 @@ class Distribution2D {
   // Returns a point in [0,1)^2 and its density w.r.t. area in [0,1]^2.
   Vec2f sample(Vec2f u, float* pdf) const;
   float pdf(Vec2f p) const;
+  // Prefetches the row slot sample(u) reads and returns the point sample(u)
+  // returns when that slot keeps its own bin (up to where in the bin), for a
+  // caller that prefetches data at the point. Reads only the marginal, which
+  // is small enough to stay cached.
+  Vec2f prefetch_sample(Vec2f u) const;
 
  private:
   int width_ = 0, height_ = 0;

@@ -16,23 +16,37 @@ Vec2f direction_to_uv(Vec3f d) {
 }
 
 Vec3f uv_to_direction(Vec2f uv, float* sin_theta) {
-  float theta = uv.y * kPi, phi = uv.x * 2.0f * kPi;
-  float st = std::sin(theta);
-  *sin_theta = st;
-  return {std::sin(phi) * st, std::cos(theta), -std::cos(phi) * st};
+  const SinCos theta = sincos_turns(0.5f * uv.y), phi = sincos_turns(uv.x);
+  *sin_theta = theta.sin;
+  return {phi.sin * theta.sin, theta.cos, -phi.cos * theta.sin};
 }
 
-// Bilinear lookup with texel (i, j) at u = i / width (periodic in u) and
-// v = j / (height - 1), as Mitsuba's envmap (which appends a copy of column 0).
-Rgb envmap_lookup(const Image& img, Vec2f uv) {
+// The four texels of a bilinear lookup, with texel (i, j) at u = i / width
+// (periodic in u) and v = j / (height - 1), as Mitsuba's envmap (which appends
+// a copy of column 0).
+struct BilinearTexels {
+  int x0, x1, y0, y1;
+  float fx, fy;
+};
+
+BilinearTexels envmap_texels(const Image& img, Vec2f uv) {
   int w = img.width(), h = img.height();
-  float x = uv.x * float(w), y = uv.y * float(h - 1);
-  int x0 = std::clamp(int(std::floor(x)), 0, w), y0 = std::clamp(int(std::floor(y)), 0, h - 1);
+  // uv is in [0, 1]^2, so truncation is floor (std::floor is a libm call
+  // without SSE4.1; this runs for every environment lookup and prefetch).
+  float x = std::max(0.0f, uv.x) * float(w), y = std::max(0.0f, uv.y) * float(h - 1);  // NaN -> 0
+  int x0 = std::min(int(x), w), y0 = std::min(int(y), h - 1);
   float fx = std::clamp(x - float(x0), 0.0f, 1.0f), fy = std::clamp(y - float(y0), 0.0f, 1.0f);
-  int x1 = x0 + 1, y1 = std::min(y0 + 1, h - 1);
   // Periodic in u: x0 ∈ [0, w], x1 ∈ [1, w + 1] (a compare, not a division).
-  auto at = [&](int xi, int yi) { return img.rgb(xi >= w ? xi - w : xi, yi); };
-  return (at(x0, y0) * (1 - fx) + at(x1, y0) * fx) * (1 - fy) + (at(x0, y1) * (1 - fx) + at(x1, y1) * fx) * fy;
+  int x1 = x0 + 1;
+  if (x0 >= w) x0 -= w;
+  if (x1 >= w) x1 -= w;
+  return {x0, x1, y0, std::min(y0 + 1, h - 1), fx, fy};
+}
+
+Rgb envmap_lookup(const Image& img, Vec2f uv) {
+  const BilinearTexels t = envmap_texels(img, uv);
+  return (img.rgb(t.x0, t.y0) * (1 - t.fx) + img.rgb(t.x1, t.y0) * t.fx) * (1 - t.fy) +
+         (img.rgb(t.x0, t.y1) * (1 - t.fx) + img.rgb(t.x1, t.y1) * t.fx) * t.fy;
 }
 
 float determinant_sign(const Transform& t) {
@@ -296,29 +310,20 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
         if (dc2 > r2 * (1.0f + 1e-5f)) {
           // Outside: sample the cone of directions the sphere subtends and
           // place the point on the sphere from the cone angles (pbrt-v4's
-          // construction), in double. Intersecting the sampled ray with the
-          // sphere instead cancels catastrophically in float for a light
-          // 1e-3 of its distance across and put points on the far side
+          // construction; sphere_point_in_cone). Intersecting the sampled ray
+          // with the sphere instead cancels catastrophically in float for a
+          // light 1e-3 of its distance across and put points on the far side
           // (back-facing: zero radiance, a -0.2 % bias; docs/stability.md).
-          // Written as short, independent dependency chains (the distance's sqrt
-          // and sin^2 of the cone angle start together): this is the hottest
-          // code of scenes lit by small spheres.
-          const double dist_c = std::sqrt(double(dc2));
-          const double radius = double(s.radius);
-          const double inv_sin_max = dist_c / radius;
-          const double one_minus_cos_alpha = cone_one_minus_cos_from_sin2(radius * radius / double(dc2));
-          const double one_minus_cos = double(u.y) * one_minus_cos_alpha;
-          const double sin2 = one_minus_cos * (2.0 - one_minus_cos);
-          const double cos_theta = 1.0 - one_minus_cos;
-          // Angle at the centre between the reference point and the sampled point.
-          const double sin2_over_sin_max = sin2 * inv_sin_max;
-          const double cos_c =
-              sin2_over_sin_max + cos_theta * std::sqrt(std::max(0.0, 1.0 - sin2_over_sin_max * inv_sin_max));
-          const float sin_c = float(std::sqrt(std::max(0.0, 1.0 - cos_c * cos_c)));
-          // The azimuth needs no double: an error of 1e-7 rad moves the point by 1e-7 radii.
-          const float phi = 2.0f * kPi * u.x;
-          const Frame frame(dc * float(1.0 / dist_c));  // z towards the centre
-          n = normalize(frame.to_world(Vec3f(-sin_c * std::cos(phi), -sin_c * std::sin(phi), float(-cos_c))));
+          // The pdf is formed in double from (radius, distance) alone, exactly
+          // as pdf_shape_direction forms it, so that MIS sees equal pdfs; it
+          // is off the sample's dependency chain.
+          const double one_minus_cos_alpha = cone_one_minus_cos_from_sin2(double(s.radius) * double(s.radius) / double(dc2));
+          const SphereConePoint c = sphere_point_in_cone(r2 / dc2, u.y);
+          // The azimuth needs no care: an error of 1e-7 rad moves the point by 1e-7 radii.
+          const SinCos phi = sincos_turns(u.x);
+          const Frame frame(dc * (1.0f / std::sqrt(dc2)));  // z towards the centre
+          // Unit up to rounding (an orthonormal frame and a unit vector): no normalisation.
+          n = frame.to_world(Vec3f(-c.sin_c * phi.cos, -c.sin_c * phi.sin, -c.cos_c));
           p = s.center + n * s.radius;
           pdf_solid_angle = uniform_cone_pdf(one_minus_cos_alpha);
         } else {
@@ -448,15 +453,37 @@ float FrameScene::pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& h
   return pdf_shape_direction(shapes_[size_t(hit.shape)], ref_p, hit) / float(scene_.emitters.size());
 }
 
-float FrameScene::pdf_environment_direction(Vec3f d) const {
-  if (environment_ < 0) return 0.0f;
+float FrameScene::pdf_environment_direction(Vec3f d) const { return environment_along(d).pdf; }
+
+FrameScene::EnvironmentLookup FrameScene::environment_along(Vec3f d) const {
+  EnvironmentLookup out;
+  if (environment_ < 0) return out;
   const Emitter& em = scene_.emitters[size_t(environment_)];
-  float select_pdf = 1.0f / float(scene_.emitters.size());
-  if (em.type == EmitterType::kConstant) return kInvFourPi * select_pdf;
+  const float select_pdf = 1.0f / float(scene_.emitters.size());
+  if (em.type == EmitterType::kConstant) {
+    out.radiance = em.radiance;
+    out.pdf = kInvFourPi * select_pdf;
+    return out;
+  }
   const Envmap& env = envmaps_[size_t(environment_)];
-  Vec3f local = normalize(env.to_local.vector(d));
-  float sin_theta = std::sqrt(std::max(local.x * local.x + local.z * local.z, 1e-14f));
-  return env.distribution.pdf(direction_to_uv(local)) / (2.0f * kPi * kPi * sin_theta) * select_pdf;
+  const Vec3f local = normalize(env.to_local.vector(d));
+  const Vec2f uv = direction_to_uv(local);
+  out.radiance = envmap_lookup(*em.envmap, uv) * em.scale;
+  const float sin_theta = std::sqrt(std::max(local.x * local.x + local.z * local.z, 1e-14f));
+  out.pdf = env.distribution.pdf(uv) / (2.0f * kPi * kPi * sin_theta) * select_pdf;
+  return out;
+}
+
+void FrameScene::prefetch_emitter_sample(float u_select, Vec2f u) const {
+  const size_t count = scene_.emitters.size();
+  if (count == 0) return;
+  const size_t index = std::min(size_t(u_select * float(count)), count - 1);
+  if (scene_.emitters[index].type != EmitterType::kEnvmap) return;
+  const Envmap& env = envmaps_[index];
+  const Vec2f uv = env.distribution.prefetch_sample(u);
+  const BilinearTexels t = envmap_texels(*env.image, uv);
+  env.image->prefetch_rgb(t.x0, t.y0);
+  env.image->prefetch_rgb(t.x0, t.y1);
 }
 
 Rgb FrameScene::eval_area_emitter(const SurfaceInteraction& si) const {

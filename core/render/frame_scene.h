@@ -69,6 +69,21 @@ class FrameScene {
   // produced `hit` from `ref_p`.
   float pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& hit) const;
   float pdf_environment_direction(Vec3f d) const;
+  // What a ray escaping along `d` sees: the environment's radiance and the
+  // solid-angle pdf (with selection) of sampling `d` as an emitter. One
+  // direction-to-uv conversion for both (its atan2 and acos were 4 % of PT on
+  // matpreview when eval_environment and pdf_environment_direction each did it).
+  struct EnvironmentLookup {
+    Rgb radiance;
+    float pdf = 0;
+  };
+  EnvironmentLookup environment_along(Vec3f d) const;
+  // Starts loading the memory that sample_emitter_direction(., u_select, u)
+  // will most likely read, where that is a table too big for the cache (an
+  // environment map's alias slots and texels). An integrator that knows its
+  // next emitter sample's numbers before it traces the ray to that vertex
+  // calls this first, so that the loads arrive while Embree traverses.
+  void prefetch_emitter_sample(float u_select, Vec2f u) const;
   // Radiance leaving an emitting surface towards -ray (area emitters).
   Rgb eval_area_emitter(const SurfaceInteraction& si) const;
   // Radiance arriving along a ray that escaped the scene.

@@ -16,11 +16,20 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
   Vec3f prev_p = ray.o;
   float prev_bsdf_pdf = 1.0f;
   bool prev_bsdf_delta = true;
+  const bool prefetch_emitter_tables = scene.has_environment();
 
   for (int depth = 0;; ++depth) {
     SurfaceInteraction si;
     ++counters.rays;
     if (counters.ray_log) counters.ray_log->push_back({ray, false});
+    // The emitter sample at the vertex this ray finds draws the next three
+    // numbers; an environment map's tables miss the cache, so their loads
+    // start now and overlap Embree's traversal (frame_scene.h).
+    if (prefetch_emitter_tables) {
+      Sampler ahead = sampler;
+      const float u_select = ahead.next_1d();
+      scene.prefetch_emitter_sample(u_select, ahead.next_2d());
+    }
     bool hit = scene.intersect(ray, &si);
 
     // ---- Emission seen along the ray, weighted against emitter sampling ----
@@ -28,8 +37,9 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
       Rgb emitted;
       float emitter_pdf = 0;
       if (!hit) {
-        emitted = scene.eval_environment(ray.d);
-        if (!prev_bsdf_delta && !emitted.is_black()) emitter_pdf = scene.pdf_environment_direction(ray.d);
+        const FrameScene::EnvironmentLookup env = scene.environment_along(ray.d);
+        emitted = env.radiance;
+        emitter_pdf = env.pdf;
       } else if (scene.emitter_of_shape(si.shape) >= 0) {
         emitted = scene.eval_area_emitter(si);
         if (!prev_bsdf_delta && !emitted.is_black()) emitter_pdf = scene.pdf_emitter_direction(prev_p, si);
