@@ -453,7 +453,22 @@ float FrameScene::pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& h
   return pdf_shape_direction(shapes_[size_t(hit.shape)], ref_p, hit) / float(scene_.emitters.size());
 }
 
-float FrameScene::pdf_environment_direction(Vec3f d) const { return environment_along(d).pdf; }
+// Solid-angle density of an envmap sample at `local` (the envmap's frame), uv
+// its texture position; without emitter selection.
+float FrameScene::envmap_direction_pdf(const Envmap& env, Vec3f local, Vec2f uv) const {
+  const float sin_theta = std::sqrt(std::max(local.x * local.x + local.z * local.z, 1e-14f));
+  return env.distribution.pdf(uv) / (2.0f * kPi * kPi * sin_theta);
+}
+
+float FrameScene::pdf_environment_direction(Vec3f d) const {
+  if (environment_ < 0) return 0.0f;
+  const Emitter& em = scene_.emitters[size_t(environment_)];
+  const float select_pdf = 1.0f / float(scene_.emitters.size());
+  if (em.type == EmitterType::kConstant) return kInvFourPi * select_pdf;
+  const Envmap& env = envmaps_[size_t(environment_)];
+  const Vec3f local = normalize(env.to_local.vector(d));
+  return envmap_direction_pdf(env, local, direction_to_uv(local)) * select_pdf;
+}
 
 FrameScene::EnvironmentLookup FrameScene::environment_along(Vec3f d) const {
   EnvironmentLookup out;
@@ -469,8 +484,7 @@ FrameScene::EnvironmentLookup FrameScene::environment_along(Vec3f d) const {
   const Vec3f local = normalize(env.to_local.vector(d));
   const Vec2f uv = direction_to_uv(local);
   out.radiance = envmap_lookup(*em.envmap, uv) * em.scale;
-  const float sin_theta = std::sqrt(std::max(local.x * local.x + local.z * local.z, 1e-14f));
-  out.pdf = env.distribution.pdf(uv) / (2.0f * kPi * kPi * sin_theta) * select_pdf;
+  out.pdf = envmap_direction_pdf(env, local, uv) * select_pdf;
   return out;
 }
 

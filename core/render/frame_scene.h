@@ -121,6 +121,7 @@ class FrameScene {
   Vec3f shading_normal(const ShapeState& s, const Shape& shape, uint32_t tri, float b1, float b2, Vec3f face_n) const;
   float pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const;
   Rgb eval_envmap(const Emitter& e, const Envmap& env, Vec3f d) const;
+  float envmap_direction_pdf(const Envmap& env, Vec3f local, Vec2f uv) const;
 
   Scene scene_;
   std::unique_ptr<Accelerator> accel_;
