@@ -317,7 +317,6 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
           // The pdf is formed in double from (radius, distance) alone, exactly
           // as pdf_shape_direction forms it, so that MIS sees equal pdfs; it
           // is off the sample's dependency chain.
-          const double one_minus_cos_alpha = cone_one_minus_cos_from_sin2(double(s.radius) * double(s.radius) / double(dc2));
           const SphereConePoint c = sphere_point_in_cone(r2 / dc2, u.y);
           // The azimuth needs no care: an error of 1e-7 rad moves the point by 1e-7 radii.
           const SinCos phi = sincos_turns(u.x);
@@ -325,7 +324,7 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
           // Unit up to rounding (an orthonormal frame and a unit vector): no normalisation.
           n = frame.to_world(Vec3f(-c.sin_c * phi.cos, -c.sin_c * phi.sin, -c.cos_c));
           p = s.center + n * s.radius;
-          pdf_solid_angle = uniform_cone_pdf(one_minus_cos_alpha);
+          pdf_solid_angle = sphere_cone_pdf(double(dc2), double(s.radius) * double(s.radius));
         } else {
           // Inside (or on) the sphere: uniform area sampling.
           n = square_to_uniform_sphere(u);
@@ -438,7 +437,7 @@ float FrameScene::pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const Su
     Vec3f dc = s.center - ref_p;
     float dc2 = length_squared(dc), r2 = s.radius * s.radius;
     if (dc2 > r2 * (1.0f + 1e-5f)) {
-      return uniform_cone_pdf(cone_one_minus_cos_from_sin2(double(s.radius) * double(s.radius) / double(dc2)));
+      return sphere_cone_pdf(double(dc2), double(s.radius) * double(s.radius));
     }
   }
   Vec3f d = hit.p - ref_p;

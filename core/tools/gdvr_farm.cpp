@@ -40,6 +40,7 @@
 
 #include "core/io/atomic_file.h"
 #include "core/io/color_transform.h"
+#include "core/io/shipped_ocio_config.h"
 #include "core/io/image_io.h"
 #include "core/io/video_encoder.h"
 #include "core/job/job_runner.h"
@@ -441,20 +442,6 @@ void fps_rational(double fps, int* num, int* den) {
   } else {
     *num = int(std::round(fps * 1000)), *den = 1000;
   }
-}
-
-// The shipped OCIO config: beside an installed binary
-// (<prefix>/bin -> <prefix>/share/gdvr/ocio) or in the source tree of a build
-// folder (build/core/gdvr-farm -> data/ocio).
-std::string find_shipped_ocio_config() {
-  std::error_code ec;
-  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) return "data/ocio/config.ocio";
-  const fs::path dir = exe.parent_path();
-  for (const fs::path& candidate :
-       {dir / "../share/gdvr/ocio/config.ocio", dir / "../../data/ocio/config.ocio", dir / "../data/ocio/config.ocio"})
-    if (fs::exists(candidate, ec)) return fs::weakly_canonical(candidate, ec).string();
-  return "data/ocio/config.ocio";
 }
 
 const Image* main_rgb(const LayeredImage& image) {

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "core/io/color_transform.h"
+#include "core/io/shipped_ocio_config.h"
 #include "core/report/error_time_report.h"
 #include "core/tools/cli_args.h"
 #include "core/util/memory_tuning.h"
@@ -47,20 +48,6 @@ std::vector<std::string> split(const std::string& s, char sep) {
   while (std::getline(ss, item, sep))
     if (!item.empty()) out.push_back(item);
   return out;
-}
-
-// The shipped OCIO config: beside an installed binary
-// (<prefix>/bin -> <prefix>/share/gdvr/ocio) or in the source tree of a build
-// folder (build/core/gdvr-report -> data/ocio); as gdvr-farm finds it.
-std::string find_shipped_ocio_config() {
-  std::error_code ec;
-  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) return "data/ocio/config.ocio";
-  const fs::path dir = exe.parent_path();
-  for (const fs::path& candidate :
-       {dir / "../share/gdvr/ocio/config.ocio", dir / "../../data/ocio/config.ocio", dir / "../data/ocio/config.ocio"})
-    if (fs::exists(candidate, ec)) return fs::weakly_canonical(candidate, ec).string();
-  return "data/ocio/config.ocio";
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -37,7 +38,9 @@ TEST(SphereConeTest, AngleAtTheCentreMatchesLongDouble) {
       // sin c is where cancellation would show (c small, near the pole facing
       // the reference point): relative accuracy there.
       ASSERT_NEAR(c.sin_c, double(want_sin), 2e-6 * double(want_sin) + tolerance) << sin_alpha << " " << u;
-      if (want_sin > 0 && want_sin < 1e-2) ASSERT_NEAR(c.sin_c / double(want_sin), 1.0, 1e-4) << sin_alpha << " " << u;
+      if (want_sin > 0 && want_sin < 1e-2) {
+        ASSERT_NEAR(c.sin_c / double(want_sin), 1.0, 1e-4) << sin_alpha << " " << u;
+      }
       ASSERT_NEAR(double(c.sin_c) * c.sin_c + double(c.cos_c) * c.cos_c, 1.0, 1e-6);
       ++checked;
     }
@@ -50,6 +53,25 @@ TEST(SphereConeTest, TheConeEdgeLandsOnTheSilhouette) {
   for (float sin_alpha : {1e-3f, 0.1f, 0.24f, 0.6f}) {
     const SphereConePoint c = sphere_point_in_cone(sin_alpha * sin_alpha, 1.0f);
     EXPECT_NEAR(c.cos_c, sin_alpha, 2e-6f * sin_alpha + 1e-7f) << sin_alpha;
+  }
+}
+
+// The cone's pdf, 1 / (2 pi (1 - cos alpha)), from a light 1e-20 of its
+// distance across to one almost touching: relative accuracy of float.
+TEST(SphereConeTest, PdfMatchesLongDouble) {
+  for (double dist2 : {1e-6, 1.0, 1e8}) {
+    for (long double sin2_alpha : {1e-40L, 1e-12L, 1e-4L, 0.0625L, 0.5L, 0.99L, 1.0L / (1.0L + 1e-5L)}) {
+      const double r2 = double(sin2_alpha * dist2);
+      const long double s = (long double)r2 / (long double)dist2;
+      const long double one_minus_cos = s / (1 + std::sqrt(1 - s));
+      const long double want = 1 / (2 * 3.14159265358979323846264L * one_minus_cos);
+      const float pdf = sphere_cone_pdf(dist2, r2);
+      if (want > (long double)std::numeric_limits<float>::max()) {
+        EXPECT_TRUE(std::isinf(pdf)) << dist2 << " " << double(sin2_alpha);
+        continue;
+      }
+      EXPECT_NEAR(double(pdf / want), 1.0, 3e-7) << dist2 << " " << double(sin2_alpha);
+    }
   }
 }
 
