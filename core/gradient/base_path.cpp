@@ -25,6 +25,7 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
   Rgb beta(1.0f);
   float eta = 1.0f;
   Ray ray = first.ray;
+  const bool prefetch_emitter_tables = scene.has_environment();
 
   if (!first.hit) {
     if (!settings.hide_emitters) rec.direct = scene.eval_environment(ray.d);
@@ -119,6 +120,14 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
 
     // ---- The next vertex, intersected into a new record entry (dropped if the ray escapes) ----
     ++counters.rays;
+    // As in trace_path: the next vertex's emitter sample draws the next three
+    // numbers, and an environment map's tables for them start loading now,
+    // overlapping the traversal.
+    if (prefetch_emitter_tables) {
+      Sampler ahead = sampler;
+      const float u_select = ahead.next_1d();
+      scene.prefetch_emitter_sample(u_select, ahead.next_2d());
+    }
     rec.v.emplace_back();  // `v` and `si` may move: only indices from here on
     const bool hit = scene.intersect(ray, &rec.v.back().si);
     if (!hit) rec.v.pop_back();
@@ -126,9 +135,11 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
     if (!hit) {
       left.next = PathNext::kEscaped;
       left.escape_dir = d;
-      left.escape_le = scene.eval_environment(d);
+      // Radiance and pdf from one direction-to-uv conversion.
+      const FrameScene::EnvironmentLookup env = scene.environment_along(d);
+      left.escape_le = env.radiance;
       if (!left.escape_le.is_black()) {
-        left.escape_pdf = left.bs.is_delta() ? 0.0f : scene.pdf_environment_direction(d);
+        left.escape_pdf = left.bs.is_delta() ? 0.0f : env.pdf;
         left.w_escape = left.bs.is_delta() ? 1.0f : mis_power(left.bs.pdf, left.escape_pdf);
         left.escape = beta * left.escape_le * left.w_escape;
         rec.indirect += left.escape;
