@@ -25,7 +25,6 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
   Rgb beta(1.0f);
   float eta = 1.0f;
   Ray ray = first.ray;
-  const bool prefetch_emitter_tables = scene.has_environment();
 
   if (!first.hit) {
     if (!settings.hide_emitters) rec.direct = scene.eval_environment(ray.d);
@@ -123,11 +122,7 @@ void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings
     // As in trace_path: the next vertex's emitter sample draws the next three
     // numbers, and an environment map's tables for them start loading now,
     // overlapping the traversal.
-    if (prefetch_emitter_tables) {
-      Sampler ahead = sampler;
-      const float u_select = ahead.next_1d();
-      scene.prefetch_emitter_sample(u_select, ahead.next_2d());
-    }
+    scene.prefetch_next_emitter_sample(sampler);
     rec.v.emplace_back();  // `v` and `si` may move: only indices from here on
     const bool hit = scene.intersect(ray, &rec.v.back().si);
     if (!hit) rec.v.pop_back();

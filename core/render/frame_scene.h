@@ -10,6 +10,7 @@
 #include "core/accel/accelerator.h"
 #include "core/math/bounds.h"
 #include "core/math/distribution.h"
+#include "core/math/rng.h"
 #include "core/render/ray.h"
 #include "core/scene/scene.h"
 
@@ -84,6 +85,14 @@ class FrameScene {
   // next emitter sample's numbers before it traces the ray to that vertex
   // calls this first, so that the loads arrive while Embree traverses.
   void prefetch_emitter_sample(float u_select, Vec2f u) const;
+  // The same for the emitter sample whose numbers `sampler` draws next (a
+  // copy reads them ahead; the caller's stream is untouched). Only scenes with
+  // an environment have such tables.
+  void prefetch_next_emitter_sample(Sampler ahead) const {
+    if (!has_environment()) return;
+    const float u_select = ahead.next_1d();
+    prefetch_emitter_sample(u_select, ahead.next_2d());
+  }
   // Radiance leaving an emitting surface towards -ray (area emitters).
   Rgb eval_area_emitter(const SurfaceInteraction& si) const;
   // Radiance arriving along a ray that escaped the scene.

@@ -16,7 +16,6 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
   Vec3f prev_p = ray.o;
   float prev_bsdf_pdf = 1.0f;
   bool prev_bsdf_delta = true;
-  const bool prefetch_emitter_tables = scene.has_environment();
 
   for (int depth = 0;; ++depth) {
     SurfaceInteraction si;
@@ -25,11 +24,7 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
     // The emitter sample at the vertex this ray finds draws the next three
     // numbers; an environment map's tables miss the cache, so their loads
     // start now and overlap Embree's traversal (frame_scene.h).
-    if (prefetch_emitter_tables) {
-      Sampler ahead = sampler;
-      const float u_select = ahead.next_1d();
-      scene.prefetch_emitter_sample(u_select, ahead.next_2d());
-    }
+    scene.prefetch_next_emitter_sample(sampler);
     bool hit = scene.intersect(ray, &si);
 
     // ---- Emission seen along the ray, weighted against emitter sampling ----
