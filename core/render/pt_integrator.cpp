@@ -3,6 +3,7 @@
 #include <chrono>
 #include <vector>
 
+#include "core/render/path_batch.h"
 #include "core/render/perspective_camera.h"
 #include "core/render/tile_scheduler.h"
 
@@ -70,21 +71,16 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
     }
     Status st = run_tiles(w, h, opts, [&](const Tile& tile) {
       PathCounters counters;
-      for (int y = tile.y0; y < tile.y1; ++y)
-        for (int x = tile.x0; x < tile.x1; ++x) {
-          PixelSums& ps = sums[size_t(y) * w + x];
-          for (int s = first; s < first + count; ++s) {
-            Sampler sampler(settings.seed, frame, uint32_t(x), uint32_t(y), uint32_t(s));
-            Vec2f jitter = sampler.next_2d();  // box filter: uniform within the pixel
-            Ray ray = camera.generate_ray({float(x) + jitter.x, float(y) + jitter.y});
-            PathSample ls = trace_path(scene, path, ray, sampler, counters);
-            for (int c = 0; c < 3; ++c) {
-              ps.sum[c] += ls.radiance[c];
-              ps.sum_sq[c] += double(ls.radiance[c]) * ls.radiance[c];
-              ps.direct[c] += ls.direct[c];
-            }
-          }
-        }
+      trace_tile_samples(scene, path, camera, settings.seed, frame, tile, first, count, settings.paths_in_flight,
+                         counters,
+                         [&](int x, int y, const PathSample& ls) {
+                           PixelSums& ps = sums[size_t(y) * w + x];
+                           for (int c = 0; c < 3; ++c) {
+                             ps.sum[c] += ls.radiance[c];
+                             ps.sum_sq[c] += double(ls.radiance[c]) * ls.radiance[c];
+                             ps.direct[c] += ls.direct[c];
+                           }
+                         });
       rays += counters.rays;
       invalid += counters.invalid_samples;
     });

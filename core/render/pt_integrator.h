@@ -8,6 +8,7 @@
 #include "core/image/image.h"
 #include "core/render/frame_scene.h"
 #include "core/render/direct_emission.h"
+#include "core/render/path_batch.h"
 #include "core/render/path_tracer.h"
 
 namespace gdvr {
@@ -19,6 +20,7 @@ struct FrameRenderSettings {
   uint64_t seed = 0;
   int threads = 0;
   int tile_size = 16;
+  int paths_in_flight = kPathBatch;  // per thread (path_batch.h); 1: one at a time
   PathTracerSettings path;
   // Emitters seen directly from the camera: their own stratified pass, or
   // (strata 0) the paths' own camera samples. See direct_emission.h.

@@ -1,15 +1,16 @@
 // gdvr-bench: the path tracer's ray throughput against the limit of bare ray
 // casting on this machine.
 //
-//   gdvr-bench SCENE.xml [--spp N] [--threads N] [--runs N] [--param NAME=VALUE ...]
+//   gdvr-bench SCENE.xml [--spp N] [--threads N] [--runs N] [--paths-in-flight N] [--param NAME=VALUE ...]
 //
 // 1. Renders the scene with the path tracer (all shading, sampling, MIS) and
 //    reports rays/s.
-// 2. Records every ray that render traced (same scene, seed, spp), then replays
+// 2. Records every ray that render traced (same scene, seed, spp, tiles),
+//    in the order the path tracer cast them and in path order, then replays
 //    exactly those rays through the accelerator's bare Embree calls
 //    (rtcIntersect1 / rtcOccluded1, no shading), on the same thread count.
-// The ratio of (1) to (2) is the share of the ray-casting limit the path tracer
-// reaches. Each figure is the median of --runs runs measured in the same process.
+// The ratio of (1) to the faster of the two replays in (2) is the share of the
+// ray-casting limit the path tracer reaches. Each figure is the median of --runs runs measured in the same process.
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include "core/render/frame_scene.h"
+#include "core/render/path_batch.h"
 #include "core/render/perspective_camera.h"
 #include "core/render/pt_integrator.h"
 #include "core/render/tile_scheduler.h"
@@ -41,20 +43,60 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Traces the same samples as render_frame_pt, single pass, and keeps the rays.
-std::vector<RecordedRay> record_rays(const FrameScene& scene, const FrameRenderSettings& s) {
+// The rays of the samples render_frame_pt traces (single pass, same tiles),
+// in one of two orders:
+//  - cast order: as the path tracer casts them, a batch of paths at a time
+//    (path_batch.h), which is what the render's rays/s measures;
+//  - path order: each path's rays in turn (trace_path), which keeps a path's
+//    consecutive rays near each other in the BVH and so is faster to cast bare.
+// The bare limit is the faster of the two.
+enum class RayOrder { kCast, kPath };
+
+std::vector<RecordedRay> record_rays(const FrameScene& scene, const FrameRenderSettings& s, RayOrder order) {
   PerspectiveCamera camera(scene.scene().camera, s.width, s.height);
   std::vector<RecordedRay> rays;
   PathCounters counters;
   counters.ray_log = &rays;
-  for (int y = 0; y < s.height; ++y)
-    for (int x = 0; x < s.width; ++x)
-      for (int i = 0; i < s.spp; ++i) {
-        Sampler sampler(s.seed, 0, uint32_t(x), uint32_t(y), uint32_t(i));
-        Vec2f j = sampler.next_2d();
-        trace_path(scene, s.path, camera.generate_ray({float(x) + j.x, float(y) + j.y}), sampler, counters);
-      }
+  TileRunOptions one_thread;  // one thread: the log is not shared
+  one_thread.threads = 1;
+  one_thread.tile_size = s.tile_size;
+  Status st = run_tiles(s.width, s.height, one_thread, [&](const Tile& tile) {
+    if (order == RayOrder::kCast) {
+      trace_tile_samples(scene, s.path, camera, s.seed, 0, tile, 0, s.spp, s.paths_in_flight, counters,
+                         [](int, int, const PathSample&) {});
+      return;
+    }
+    for (int y = tile.y0; y < tile.y1; ++y)
+      for (int x = tile.x0; x < tile.x1; ++x)
+        for (int i = 0; i < s.spp; ++i) {
+          Sampler sampler(s.seed, 0, uint32_t(x), uint32_t(y), uint32_t(i));
+          Vec2f j = sampler.next_2d();
+          trace_path(scene, s.path, camera.generate_ray({float(x) + j.x, float(y) + j.y}), sampler, counters);
+        }
+  });
+  if (!st.ok()) std::fprintf(stderr, "gdvr-bench: recording: %s\n", st.to_string().c_str());
   return rays;
+}
+
+// Casts `rays` through the accelerator's bare Embree calls; returns rays/s.
+double replay_bare(const Accelerator& accel, const std::vector<RecordedRay>& rays, tbb::task_arena& arena) {
+  std::atomic<uint64_t> hits{0};
+  auto t0 = std::chrono::steady_clock::now();
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const tbb::blocked_range<size_t>& br) {
+      uint64_t local = 0;
+      RayHit hit;
+      for (size_t i = br.begin(); i != br.end(); ++i) {
+        const RecordedRay& rr = rays[i];
+        if (rr.shadow) local += accel.occluded(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax);
+        else local += accel.intersect(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax, &hit);
+      }
+      hits += local;  // keeps the loop from being optimised away
+    });
+  });
+  const double rate = double(rays.size()) / seconds_since(t0);
+  if (hits.load() == 0) std::fprintf(stderr, "gdvr-bench: warning: no ray hit anything\n");
+  return rate;
 }
 
 }  // namespace
@@ -62,11 +104,11 @@ std::vector<RecordedRay> record_rays(const FrameScene& scene, const FrameRenderS
 int main(int argc, char** argv) {
   gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   if (argc < 2) {
-    std::fprintf(stderr, "usage: gdvr-bench SCENE.xml [--spp N] [--threads N] [--runs N] [--param NAME=VALUE ...]\n");
+    std::fprintf(stderr, "usage: gdvr-bench SCENE.xml [--spp N] [--threads N] [--runs N] [--paths-in-flight N] [--param NAME=VALUE ...]\n");
     return 2;
   }
   std::string path = argv[1];
-  int spp = 16, threads = 0, runs = 3;
+  int spp = 16, threads = 0, runs = 3, paths_in_flight = kPathBatch;
   LoadOptions load;
   for (int i = 2; i < argc; ++i) {
     std::string a = argv[i];
@@ -75,6 +117,7 @@ int main(int argc, char** argv) {
     if (a == "--spp") spp = std::max(1, std::stoi(v));
     else if (a == "--threads") threads = std::max(1, std::stoi(v));
     else if (a == "--runs") runs = std::max(1, std::stoi(v));
+    else if (a == "--paths-in-flight") paths_in_flight = std::clamp(std::stoi(v), 1, kPathBatch);
     else if (a == "--param") {
       size_t eq = v.find('=');
       if (eq == std::string::npos) { std::fprintf(stderr, "gdvr-bench: --param NAME=VALUE\n"); return 2; }
@@ -93,52 +136,51 @@ int main(int argc, char** argv) {
   s.spp = spp;
   s.seed = 1;
   s.threads = threads;
+  s.paths_in_flight = paths_in_flight;
   s.path.max_depth = scene->defaults.max_depth;
   s.path.rr_depth = scene->defaults.rr_depth;
   const int thread_count = resolve_thread_count(threads);
 
   // Record the exact rays the render traces, then alternate path-tracer and
   // bare runs so that both see the same machine load (this machine is shared).
-  std::vector<RecordedRay> rays = record_rays(frame_scene, s);
+  const std::vector<RecordedRay> cast_order = record_rays(frame_scene, s, RayOrder::kCast);
+  const std::vector<RecordedRay> path_order = record_rays(frame_scene, s, RayOrder::kPath);
+  if (cast_order.size() != path_order.size()) {
+    std::fprintf(stderr, "gdvr-bench: the two recordings differ (%zu / %zu rays)\n", cast_order.size(),
+                 path_order.size());
+    return 1;
+  }
   const Accelerator& accel = frame_scene.accelerator();
   tbb::task_arena arena(thread_count);
-  std::vector<double> pt_rate, bare_rate;
+  std::vector<double> pt_rate, single_rate, cast_rate, path_rate, ratios, gains;
   uint64_t pt_rays = 0;
   for (int r = 0; r < runs; ++r) {
-    // ---- Path tracer ----
     auto result = render_frame_pt(frame_scene, s, 0, {});
     if (!result.ok()) { std::fprintf(stderr, "gdvr-bench: %s\n", result.status().to_string().c_str()); return 1; }
     pt_rays = result->rays;
     pt_rate.push_back(double(result->rays) / result->seconds);
-
-    // ---- Bare ray casting of the same rays ----
-    std::atomic<uint64_t> hits{0};
-    auto t0 = std::chrono::steady_clock::now();
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, rays.size(), 4096), [&](const tbb::blocked_range<size_t>& br) {
-        uint64_t local = 0;
-        RayHit hit;
-        for (size_t i = br.begin(); i != br.end(); ++i) {
-          const RecordedRay& rr = rays[i];
-          if (rr.shadow) local += accel.occluded(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax);
-          else local += accel.intersect(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax, &hit);
-        }
-        hits += local;  // keeps the loop from being optimised away
-      });
-    });
-    bare_rate.push_back(double(rays.size()) / seconds_since(t0));
-    if (hits.load() == 0) std::fprintf(stderr, "gdvr-bench: warning: no ray hit anything\n");
+    // The same render one path at a time: what the batches gain, same run.
+    FrameRenderSettings single = s;
+    single.paths_in_flight = 1;
+    auto one = render_frame_pt(frame_scene, single, 0, {});
+    if (!one.ok()) { std::fprintf(stderr, "gdvr-bench: %s\n", one.status().to_string().c_str()); return 1; }
+    single_rate.push_back(double(one->rays) / one->seconds);
+    gains.push_back(pt_rate.back() / single_rate.back());
+    cast_rate.push_back(replay_bare(accel, cast_order, arena));
+    path_rate.push_back(replay_bare(accel, path_order, arena));
+    ratios.push_back(pt_rate.back() / std::max(cast_rate.back(), path_rate.back()));
   }
 
-  double pt = median(pt_rate), bare = median(bare_rate);
   std::printf("scene            %s\n", path.c_str());
   std::printf("resolution       %dx%d, %d spp, %d threads, %d runs (medians)\n", s.width, s.height, spp, thread_count, runs);
-  std::printf("rays per render  %llu (recorded %zu)\n", (unsigned long long)pt_rays, rays.size());
-  std::printf("path tracer      %.2f Mrays/s\n", pt * 1e-6);
-  std::printf("bare Embree      %.2f Mrays/s\n", bare * 1e-6);
-  std::vector<double> ratios;
-  for (int r = 0; r < runs; ++r) ratios.push_back(pt_rate[size_t(r)] / bare_rate[size_t(r)]);
-  std::printf("ratio            %.3f (median of per-run ratios)\n", median(ratios));
+  std::printf("rays per render  %llu (recorded %zu)\n", (unsigned long long)pt_rays, cast_order.size());
+  std::printf("path tracer      %.2f Mrays/s, %d paths in flight per thread\n", median(pt_rate) * 1e-6,
+              s.paths_in_flight);
+  std::printf("  one at a time  %.2f Mrays/s (batched / one at a time: %.3f, median of per-run ratios)\n",
+              median(single_rate) * 1e-6, median(gains));
+  std::printf("bare Embree      %.2f Mrays/s in cast order, %.2f in path order\n", median(cast_rate) * 1e-6,
+              median(path_rate) * 1e-6);
+  std::printf("ratio            %.3f (median of per-run ratios to the faster bare order)\n", median(ratios));
   double loadavg[1] = {0};
   if (getloadavg(loadavg, 1) == 1) std::printf("load average     %.2f\n", loadavg[0]);
   return 0;

@@ -1,0 +1,79 @@
+#include "core/render/path_batch.h"
+
+#include <algorithm>
+
+namespace gdvr {
+namespace {
+
+void trace_at_most_one_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
+                             PathCounters& counters, PathSample* out) {
+  int live[kPathBatch];
+  int count = 0;
+  for (int i = 0; i < n; ++i) {
+    prefetch_for_next_vertex(scene, paths[i]);
+    cast_closest(scene, &paths[i], counters);
+    live[count++] = i;
+  }
+  while (count > 0) {
+    // Each stage is its own loop: its body is short enough that the core runs
+    // several paths' chains of square roots and divisions at once.
+    int shading = 0;
+    for (int k = 0; k < count; ++k) {
+      PathState& st = paths[live[k]];
+      add_emission(scene, settings, &st);
+      if (st.continues) live[shading++] = live[k];
+    }
+    for (int k = 0; k < shading; ++k) sample_emitter(scene, &paths[live[k]]);
+    for (int k = 0; k < shading; ++k) connect_emitter(&paths[live[k]]);
+    for (int k = 0; k < shading; ++k) sample_bsdf(settings, &paths[live[k]]);
+    // A vertex's shadow ray and its next ray leave the same point: cast one
+    // after the other, they share the BVH nodes near it in cache. Paths that
+    // bounced stay in order (the ray log is a pure function of the batch).
+    count = 0;
+    for (int k = 0; k < shading; ++k) {
+      PathState& st = paths[live[k]];
+      if (st.shadow_pending) resolve_shadow(cast_shadow(scene, st, counters), &st);
+      if (!st.continues) continue;
+      prefetch_for_next_vertex(scene, st);
+      cast_closest(scene, &st, counters);
+      live[count++] = live[k];
+    }
+  }
+  for (int i = 0; i < n; ++i) out[i] = finish_path(paths[i], counters);
+}
+
+}  // namespace
+
+void trace_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
+                      PathCounters& counters, PathSample* out) {
+  for (int base = 0; base < n; base += kPathBatch)
+    trace_at_most_one_batch(scene, settings, paths + base, std::min(kPathBatch, n - base), counters, out + base);
+}
+
+void trace_tile_samples(const FrameScene& scene, const PathTracerSettings& settings, const PerspectiveCamera& camera,
+                        uint64_t seed, uint32_t frame, const Tile& tile, int first_sample, int count,
+                        int paths_in_flight, PathCounters& counters, const std::function<void(int x, int y, const PathSample&)>& add) {
+  const int batch = std::clamp(paths_in_flight, 1, kPathBatch);
+  PathState paths[kPathBatch];
+  PathSample out[kPathBatch];
+  int px[kPathBatch], py[kPathBatch];
+  int n = 0;
+  auto flush = [&] {
+    trace_at_most_one_batch(scene, settings, paths, n, counters, out);
+    for (int i = 0; i < n; ++i) add(px[i], py[i], out[i]);
+    n = 0;
+  };
+  for (int y = tile.y0; y < tile.y1; ++y)
+    for (int x = tile.x0; x < tile.x1; ++x)
+      for (int s = first_sample; s < first_sample + count; ++s) {
+        Sampler sampler(seed, frame, uint32_t(x), uint32_t(y), uint32_t(s));
+        Vec2f jitter = sampler.next_2d();  // box filter: uniform within the pixel
+        start_path(&paths[n], camera.generate_ray({float(x) + jitter.x, float(y) + jitter.y}), sampler);
+        px[n] = x;
+        py[n] = y;
+        if (++n == batch) flush();
+      }
+  if (n > 0) flush();
+}
+
+}  // namespace gdvr

@@ -1,0 +1,179 @@
+// The path tracer's work per vertex, cut at its two ray casts so that a path
+// can wait between them. trace_path() runs one path through these stages;
+// trace_path_batch() (path_batch.h) runs a batch of paths stage by stage, so
+// that many independent paths' shading sits between two ray casts. Both call
+// the same functions, so a path's radiance is the same bit for bit whichever
+// driver ran it.
+//
+// Per vertex:
+//   [closest hit] -> add_emission -> sample_emitter -> connect_emitter
+//                 -> sample_bsdf -> [shadow ray] -> resolve_shadow
+// The emitter's contribution waits in the state until its shadow ray is
+// answered. The stages draw the path's numbers in the order
+// Mitsuba 3's `path` integrator does, which the gradient-domain base path
+// (core/gradient/base_path.h) replays.
+#pragma once
+
+#include "core/math/rng.h"
+#include "core/math/sampling.h"
+#include "core/render/frame_scene.h"
+#include "core/render/path_tracer.h"
+#include "core/render/russian_roulette.h"
+
+namespace gdvr {
+
+struct PathState {
+  Sampler sampler;
+  Ray ray;  // the ray to trace next
+  Rgb throughput{1.0f}, result{0.0f}, direct{0.0f};
+  float eta = 1.0f;
+  int depth = 0;
+  // The previous vertex, for MIS when a BSDF-sampled ray hits an emitter.
+  Vec3f prev_p;
+  float prev_bsdf_pdf = 1.0f;
+  bool prev_bsdf_delta = true;
+
+  bool hit = false;       // what the closest-hit query of `ray` returned
+  SurfaceInteraction si;  // the vertex it found
+  const Bsdf* bsdf = nullptr;  // its BSDF
+  bool continues = true;  // false once the path has no next ray
+
+  EmitterSample emitter;  // next-event estimation's sample at si
+
+  // Next-event estimation waiting for its shadow ray.
+  bool shadow_pending = false;
+  Ray shadow;
+  Rgb shadow_contribution;
+};
+
+inline void start_path(PathState* st, const Ray& camera_ray, const Sampler& sampler) {
+  *st = PathState{};
+  st->sampler = sampler;
+  st->ray = camera_ray;
+  st->prev_p = camera_ray.o;
+}
+
+// Before `ray` is cast: the emitter sample at the vertex it finds draws the
+// next three numbers; an environment map's tables miss the cache, so their
+// loads start now and overlap the traversal (frame_scene.h).
+inline void prefetch_for_next_vertex(const FrameScene& scene, const PathState& st) {
+  scene.prefetch_next_emitter_sample(st.sampler);
+}
+
+// ---- After the closest-hit query (st->hit, st->si) ----
+
+// Emission seen along the ray, weighted against emitter sampling. Sets
+// st->continues: whether the path goes on from this vertex.
+inline void add_emission(const FrameScene& scene, const PathTracerSettings& settings, PathState* st) {
+  const SurfaceInteraction& si = st->si;
+  if (!(st->depth == 0 && settings.hide_emitters)) {
+    Rgb emitted;
+    float emitter_pdf = 0;
+    if (!st->hit) {
+      const FrameScene::EnvironmentLookup env = scene.environment_along(st->ray.d);
+      emitted = env.radiance;
+      emitter_pdf = env.pdf;
+    } else if (scene.emitter_of_shape(si.shape) >= 0) {
+      emitted = scene.eval_area_emitter(si);
+      if (!st->prev_bsdf_delta && !emitted.is_black()) emitter_pdf = scene.pdf_emitter_direction(st->prev_p, si);
+    }
+    if (!emitted.is_black()) {
+      float w = st->prev_bsdf_delta ? 1.0f : mis_power(st->prev_bsdf_pdf, emitter_pdf);
+      Rgb contrib = st->throughput * emitted * w;
+      st->result += contrib;
+      if (st->depth == 0) st->direct += contrib;
+    }
+  }
+  st->continues = st->hit && !(settings.max_depth >= 0 && st->depth + 1 >= settings.max_depth);
+  if (st->continues) {
+    const Scene& desc = scene.scene();
+    st->bsdf = &desc.bsdfs[size_t(desc.shapes[size_t(si.shape)].bsdf)];
+  }
+}
+
+// Emitter sampling (skipped for purely specular BSDFs): the sample waits in
+// st->emitter for connect_emitter.
+inline void sample_emitter(const FrameScene& scene, PathState* st) {
+  st->emitter = EmitterSample{};
+  if (st->bsdf->is_delta_only()) return;
+  float u_select = st->sampler.next_1d();
+  Vec2f u_light = st->sampler.next_2d();
+  st->emitter = scene.sample_emitter_direction(st->si, u_select, u_light);
+}
+
+// The BSDF towards the emitter sample, MIS-weighted; a contribution that is
+// not zero waits for its shadow ray (st->shadow_pending).
+inline void connect_emitter(PathState* st) {
+  const EmitterSample& es = st->emitter;
+  if (es.weight.is_black()) return;
+  const SurfaceInteraction& si = st->si;
+  Vec3f wi_local = si.sh_frame.to_local(es.d);
+  BsdfEval be = bsdf_eval_pdf(*st->bsdf, si.uv, si.wi, wi_local);
+  const Rgb& f = be.value;
+  if (f.is_black()) return;
+  float w = es.delta ? 1.0f : mis_power(es.pdf, be.pdf);
+  st->shadow = shadow_ray(si, es);
+  st->shadow_contribution = st->throughput * f * es.weight * w;
+  st->shadow_pending = true;
+}
+
+// BSDF sampling, the next ray and Russian roulette. Sets st->continues.
+inline void sample_bsdf(const PathTracerSettings& settings, PathState* st) {
+  const SurfaceInteraction& si = st->si;
+  st->continues = false;
+  float u_lobe = st->sampler.next_1d();
+  Vec2f u_dir = st->sampler.next_2d();
+  BsdfSample bs;
+  if (!bsdf_sample(*st->bsdf, si.uv, si.wi, u_lobe, u_dir, &bs)) return;
+  if (bs.weight.is_black() || !is_finite(bs.weight)) return;
+  st->throughput *= bs.weight;
+  st->eta *= bs.eta;
+  Vec3f d = si.sh_frame.to_world(bs.wi);
+  st->ray = si.spawn_ray(d);
+  st->prev_p = si.p;
+  st->prev_bsdf_pdf = bs.pdf;
+  st->prev_bsdf_delta = bs.is_delta();
+
+  // ---- Russian roulette (russian_roulette.h; counted after the bounce) ----
+  float throughput_max = max_component(st->throughput);
+  if (!(throughput_max > 0)) return;
+  if (st->depth + 1 >= settings.rr_depth) {
+    float q = russian_roulette_survival(throughput_max, st->eta);
+    if (st->sampler.next_1d() >= q) return;
+    st->throughput *= 1.0f / q;
+  }
+  ++st->depth;
+  st->continues = true;
+}
+
+// The answer to st->shadow.
+inline void resolve_shadow(bool occluded, PathState* st) {
+  if (!occluded) st->result += st->shadow_contribution;
+  st->shadow_pending = false;
+}
+
+inline PathSample finish_path(const PathState& st, PathCounters& counters) {
+  if (!is_finite(st.result)) {
+    ++counters.invalid_samples;
+    return PathSample{};
+  }
+  PathSample out;
+  out.radiance = st.result;
+  out.direct = st.direct;
+  return out;
+}
+
+// The two ray casts, counted (and logged for gdvr-bench) as they are made.
+inline void cast_closest(const FrameScene& scene, PathState* st, PathCounters& counters) {
+  ++counters.rays;
+  if (counters.ray_log) counters.ray_log->push_back({st->ray, false});
+  st->hit = scene.intersect(st->ray, &st->si);
+}
+
+inline bool cast_shadow(const FrameScene& scene, const PathState& st, PathCounters& counters) {
+  ++counters.rays;
+  if (counters.ray_log) counters.ray_log->push_back({st.shadow, true});
+  return scene.occluded(st.shadow);
+}
+
+}  // namespace gdvr
