@@ -115,7 +115,8 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
     s.face_normals[t] = normalize(cross(p1 - p0, p2 - p0));
   }
   s.flat.assign(m.triangle_count(), 1);
-  if (!m.normals.empty() && !shape.face_normals) {
+  s.vertex_normals = !m.normals.empty() && !shape.face_normals;
+  if (s.vertex_normals) {
     for (size_t t = 0; t < m.triangle_count(); ++t)
       for (int k = 0; k < 3; ++k) {
         Vec3f vn = m.normals[m.indices[3 * t + k]];
@@ -206,14 +207,10 @@ Status FrameScene::update(const Scene& scene) {
   return prepare_emitters();
 }
 
-// Interpolated vertex normal (Mitsuba's smooth shading normal), or the face
-// normal where the triangle is flat or the mesh has none.
-Vec3f FrameScene::shading_normal(const ShapeState& s, const Shape& shape, uint32_t tri, float b1, float b2,
-                                 Vec3f face_n) const {
+// Mitsuba's smooth shading normal (shading_normal() has ruled out the flat case).
+Vec3f FrameScene::interpolated_normal(const ShapeState& s, uint32_t tri, float b1, float b2, Vec3f face_n) const {
+  if (!s.vertex_normals) return face_n;
   const TriangleMesh& m = *s.mesh;
-  if (m.normals.empty() || shape.face_normals) return face_n;
-  // Under a mirroring instance transform the face normal flips but vertex normals do not.
-  if (s.flat[tri] && s.handedness > 0) return face_n;
   uint32_t i0 = m.indices[3 * tri], i1 = m.indices[3 * tri + 1], i2 = m.indices[3 * tri + 2];
   Vec3f interp = m.normals[i0] * (1.0f - b1 - b2) + m.normals[i1] * b1 + m.normals[i2] * b2;
   if (s.instanced) interp = s.to_world.normal(interp);
@@ -255,7 +252,7 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
     si->p = p0 * b0 + p1 * b1 + p2 * b2;
     si->offset_floor = std::min(1.0f, std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)}));
     si->n = s.instanced ? normalize(s.to_world.normal(s.face_normals[hit.prim])) * s.handedness : s.face_normals[hit.prim];
-    ns = shading_normal(s, shape, hit.prim, b1, b2, si->n);
+    ns = shading_normal(s, hit.prim, b1, b2, si->n);
     si->uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
   }
   if (shape.flip_normals) {
@@ -342,7 +339,7 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
         Vec2f b = square_to_uniform_triangle({u_tri, u.y});
         p = p0 * (1.0f - b.x - b.y) + p1 * b.x + p2 * b.y;
         n = s.instanced ? normalize(s.to_world.normal(s.face_normals[tri])) * s.handedness : s.face_normals[tri];
-        n = shading_normal(s, shape, uint32_t(tri), b.x, b.y, n);
+        n = shading_normal(s, uint32_t(tri), b.x, b.y, n);
         if (shape.flip_normals) n = -n;
         area_measure = true;
       }

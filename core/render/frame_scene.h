@@ -109,7 +109,9 @@ class FrameScene {
     std::vector<Vec3f> face_normals;           // unit, same space as `mesh` (saves a cross + sqrt per hit)
     // Per triangle: its three vertex normals equal the face normal, so the
     // shading normal needs no interpolation (box-like meshes, flat quads).
+    // All 1 for a mesh without vertex normals (or with face_normals set).
     std::vector<uint8_t> flat;
+    bool vertex_normals = false;  // shading interpolates the mesh's vertex normals
     bool instanced = false;
     Transform to_world, to_object;
     float handedness = 1;  // sign of det(to_world): a mirroring transform flips cross-product normals
@@ -127,7 +129,16 @@ class FrameScene {
   FrameScene() = default;
   Status build_shape_state(size_t i, bool animated);
   Status prepare_emitters();
-  Vec3f shading_normal(const ShapeState& s, const Shape& shape, uint32_t tri, float b1, float b2, Vec3f face_n) const;
+  // The shading normal at barycentrics (b1, b2) of triangle `tri`: the face
+  // normal where the triangle is flat (inline: the common case, and the call
+  // cost more than the test), else the interpolated vertex normals. Under a
+  // mirroring instance transform the face normal flips but vertex normals do
+  // not, so a flat triangle of a mesh with vertex normals interpolates then.
+  Vec3f shading_normal(const ShapeState& s, uint32_t tri, float b1, float b2, Vec3f face_n) const {
+    if (s.flat[tri] && (s.handedness > 0 || !s.vertex_normals)) return face_n;
+    return interpolated_normal(s, tri, b1, b2, face_n);
+  }
+  Vec3f interpolated_normal(const ShapeState& s, uint32_t tri, float b1, float b2, Vec3f face_n) const;
   float pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const;
   Rgb eval_envmap(const Emitter& e, const Envmap& env, Vec3f d) const;
   float envmap_direction_pdf(const Envmap& env, Vec3f local, Vec2f uv) const;

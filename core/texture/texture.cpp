@@ -20,9 +20,9 @@ Rgb texel(const Image& img, int x, int y) {
 
 }  // namespace
 
-Rgb Texture::eval(Vec2f uv_in) const {
+Rgb Texture::eval_varying(Vec2f uv_in) const {
   switch (type) {
-    case TextureType::kConstant: return value;
+    case TextureType::kConstant: return value;  // eval() answers this one inline
     case TextureType::kCheckerboard: {
       Vec2f uv = to_uv.apply(uv_in);
       bool mx = uv.x - std::floor(uv.x) > 0.5f, my = uv.y - std::floor(uv.y) > 0.5f;

@@ -32,9 +32,14 @@ struct Texture {
     return t;
   }
   bool is_constant() const { return type == TextureType::kConstant; }
-  Rgb eval(Vec2f uv) const;
+  // Inline for the constant case: most BSDF parameters are constants, and a
+  // call per evaluation was a tenth of a diffuse bounce's instructions.
+  Rgb eval(Vec2f uv) const { return type == TextureType::kConstant ? value : eval_varying(uv); }
   // Mean over the texture's domain (for albedo estimates and lobe selection).
   Rgb mean() const;
+
+ private:
+  Rgb eval_varying(Vec2f uv) const;  // bitmap, checkerboard
 };
 
 }  // namespace gdvr
