@@ -46,11 +46,21 @@ struct PathState {
   Rgb shadow_contribution;
 };
 
+// Sets what a new path reads before writing (not the whole state: hit, si,
+// bsdf and emitter are written by the stages before they are read).
 inline void start_path(PathState* st, const Ray& camera_ray, const Sampler& sampler) {
-  *st = PathState{};
   st->sampler = sampler;
   st->ray = camera_ray;
+  st->throughput = Rgb(1.0f);
+  st->result = Rgb(0.0f);
+  st->direct = Rgb(0.0f);
+  st->eta = 1.0f;
+  st->depth = 0;
   st->prev_p = camera_ray.o;
+  st->prev_bsdf_pdf = 1.0f;
+  st->prev_bsdf_delta = true;
+  st->continues = true;
+  st->shadow_pending = false;
 }
 
 // Before `ray` is cast: the emitter sample at the vertex it finds draws the
