@@ -52,10 +52,18 @@ class Pcg32 {
 class Sampler {
  public:
   Sampler() = default;
-  Sampler(uint64_t seed, uint32_t frame, uint32_t px, uint32_t py, uint32_t sample_index) {
-    uint64_t key = hash_combine(hash_combine(seed, frame), (uint64_t(py) << 32) | px);
-    rng_.seed(hash_combine(key, sample_index), mix64(key));
-  }
+  Sampler(uint64_t seed, uint32_t frame, uint32_t px, uint32_t py, uint32_t sample_index)
+      : Sampler(PixelKey(seed, frame, px, py), sample_index) {}
+
+  // What every sample of one pixel shares: hashed once per pixel by a loop
+  // over its samples (five of a sample's seven mixes).
+  struct PixelKey {
+    PixelKey(uint64_t seed, uint32_t frame, uint32_t px, uint32_t py)
+        : key(hash_combine(hash_combine(seed, frame), (uint64_t(py) << 32) | px)), stream(mix64(key)) {}
+    uint64_t key, stream;
+  };
+  Sampler(const PixelKey& pixel, uint32_t sample_index) { rng_.seed(hash_combine(pixel.key, sample_index), pixel.stream); }
+
   float next_1d() { return rng_.next_float(); }
   Vec2f next_2d() {
     float a = next_1d();

@@ -58,6 +58,12 @@ float determinant_sign(const Transform& t) {
 
 float triangle_area(Vec3f a, Vec3f b, Vec3f c) { return 0.5f * length(cross(b - a, c - a)); }
 
+// The scale of the coordinates a hit on this triangle is interpolated from
+// (SurfaceInteraction::offset_floor), in world space.
+float triangle_offset_floor(Vec3f p0, Vec3f p1, Vec3f p2) {
+  return std::min(1.0f, std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)}));
+}
+
 }  // namespace
 
 Expected<std::unique_ptr<FrameScene>> FrameScene::create(const Scene& scene, const std::vector<bool>& animated) {
@@ -114,6 +120,12 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
           p2 = m.positions[m.indices[3 * t + 2]];
     s.face_normals[t] = normalize(cross(p1 - p0, p2 - p0));
   }
+  if (!animated) {
+    s.offset_floors.resize(m.triangle_count());
+    for (size_t t = 0; t < m.triangle_count(); ++t)
+      s.offset_floors[t] = triangle_offset_floor(m.positions[m.indices[3 * t]], m.positions[m.indices[3 * t + 1]],
+                                                 m.positions[m.indices[3 * t + 2]]);
+  }
   s.flat.assign(m.triangle_count(), 1);
   s.vertex_normals = !m.normals.empty() && !shape.face_normals;
   if (s.vertex_normals) {
@@ -162,14 +174,23 @@ Status FrameScene::prepare_emitters() {
       if (em.shape < 0 || size_t(em.shape) >= shapes_.size())
         return invalid_argument("area emitter " + std::to_string(e) + " is not attached to a shape");
       ShapeState& s = shapes_[size_t(em.shape)];
-      if (scene_.shapes[size_t(em.shape)].type == ShapeType::kMesh) {
+      const Shape& shape = scene_.shapes[size_t(em.shape)];
+      if (shape.type == ShapeType::kMesh) {
         const TriangleMesh& m = *s.mesh;
         std::vector<float> areas(m.triangle_count());
+        s.emitter_triangles.resize(m.triangle_count());
         for (size_t t = 0; t < areas.size(); ++t) {
-          Vec3f a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
-                c = m.positions[m.indices[3 * t + 2]];
-          if (s.instanced) a = s.to_world.point(a), b = s.to_world.point(b), c = s.to_world.point(c);
-          areas[t] = triangle_area(a, b, c);
+          ShapeState::EmitterTriangle& tri = s.emitter_triangles[t];
+          tri.p0 = m.positions[m.indices[3 * t]];
+          tri.p1 = m.positions[m.indices[3 * t + 1]];
+          tri.p2 = m.positions[m.indices[3 * t + 2]];
+          if (s.instanced) tri.p0 = s.to_world.point(tri.p0), tri.p1 = s.to_world.point(tri.p1), tri.p2 = s.to_world.point(tri.p2);
+          // The same expressions interaction() evaluates at a hit, so that a
+          // sampled point and a hit on it agree bit for bit.
+          tri.n = s.instanced ? normalize(s.to_world.normal(s.face_normals[t])) * s.handedness : s.face_normals[t];
+          tri.face_normal = s.flat[t] && (s.handedness > 0 || !s.vertex_normals);
+          if (shape.flip_normals) tri.n = -tri.n;
+          areas[t] = triangle_area(tri.p0, tri.p1, tri.p2);
         }
         s.triangle_areas = Distribution1D(areas);
         s.area = float(s.triangle_areas.total());
@@ -250,7 +271,7 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
     Vec3f p0 = m.positions[i0], p1 = m.positions[i1], p2 = m.positions[i2];
     if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
     si->p = p0 * b0 + p1 * b1 + p2 * b2;
-    si->offset_floor = std::min(1.0f, std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)}));
+    si->offset_floor = s.instanced ? triangle_offset_floor(p0, p1, p2) : s.offset_floors[hit.prim];
     si->n = s.instanced ? normalize(s.to_world.normal(s.face_normals[hit.prim])) * s.handedness : s.face_normals[hit.prim];
     ns = shading_normal(s, hit.prim, b1, b2, si->n);
     si->uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
@@ -331,16 +352,18 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
         if (shape.flip_normals) n = -n;
       } else {
         float u_tri;
-        size_t tri = s.triangle_areas.sample(u.x, &u_tri);
-        const TriangleMesh& m = *s.mesh;
-        uint32_t i0 = m.indices[3 * tri], i1 = m.indices[3 * tri + 1], i2 = m.indices[3 * tri + 2];
-        Vec3f p0 = m.positions[i0], p1 = m.positions[i1], p2 = m.positions[i2];
-        if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
+        const size_t t = s.triangle_areas.sample(u.x, &u_tri);
+        const ShapeState::EmitterTriangle& tri = s.emitter_triangles[t];
         Vec2f b = square_to_uniform_triangle({u_tri, u.y});
-        p = p0 * (1.0f - b.x - b.y) + p1 * b.x + p2 * b.y;
-        n = s.instanced ? normalize(s.to_world.normal(s.face_normals[tri])) * s.handedness : s.face_normals[tri];
-        n = shading_normal(s, uint32_t(tri), b.x, b.y, n);
-        if (shape.flip_normals) n = -n;
+        p = tri.p0 * (1.0f - b.x - b.y) + tri.p1 * b.x + tri.p2 * b.y;
+        n = tri.n;
+        if (!tri.face_normal) {
+          // tri.n has flip_normals applied; interpolated_normal() takes and
+          // returns normals before it (its fallback is the face normal).
+          const Vec3f face_n = shape.flip_normals ? -tri.n : tri.n;
+          n = interpolated_normal(s, uint32_t(t), b.x, b.y, face_n);
+          if (shape.flip_normals) n = -n;
+        }
         area_measure = true;
       }
       Vec3f d = p - ref.p;

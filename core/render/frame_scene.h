@@ -107,6 +107,9 @@ class FrameScene {
   struct ShapeState {
     std::shared_ptr<const TriangleMesh> mesh;  // world space if !instanced
     std::vector<Vec3f> face_normals;           // unit, same space as `mesh` (saves a cross + sqrt per hit)
+    // Static meshes only: each triangle's SurfaceInteraction::offset_floor
+    // (nine abs and eight max per hit otherwise).
+    std::vector<float> offset_floors;
     // Per triangle: its three vertex normals equal the face normal, so the
     // shading normal needs no interpolation (box-like meshes, flat quads).
     // All 1 for a mesh without vertex normals (or with face_normals set).
@@ -118,6 +121,16 @@ class FrameScene {
     Vec3f center;       // sphere, world space
     float radius = 0;   // sphere, world space
     Distribution1D triangle_areas;  // area emitters only
+    // Area emitters only: each triangle's corners in world space and, where
+    // the shading normal is the face normal, that normal (flip_normals
+    // applied). Sampling then reads one record instead of the index buffer,
+    // three vertices and two per-triangle tables (sample_emitter_direction).
+    struct EmitterTriangle {
+      Vec3f p0, p1, p2;
+      Vec3f n;
+      bool face_normal = true;  // false: interpolate the vertex normals at the sample
+    };
+    std::vector<EmitterTriangle> emitter_triangles;
     float area = 0;
   };
   struct Envmap {

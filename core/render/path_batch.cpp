@@ -5,7 +5,7 @@
 namespace gdvr {
 namespace {
 
-void trace_at_most_one_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
+[[gnu::flatten]] void trace_at_most_one_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                              PathCounters& counters, PathSample* out) {
   int live[kPathBatch];
   int count = 0;
@@ -64,15 +64,17 @@ void trace_tile_samples(const FrameScene& scene, const PathTracerSettings& setti
     n = 0;
   };
   for (int y = tile.y0; y < tile.y1; ++y)
-    for (int x = tile.x0; x < tile.x1; ++x)
+    for (int x = tile.x0; x < tile.x1; ++x) {
+      const Sampler::PixelKey pixel(seed, frame, uint32_t(x), uint32_t(y));
       for (int s = first_sample; s < first_sample + count; ++s) {
-        Sampler sampler(seed, frame, uint32_t(x), uint32_t(y), uint32_t(s));
+        Sampler sampler(pixel, uint32_t(s));
         Vec2f jitter = sampler.next_2d();  // box filter: uniform within the pixel
         start_path(&paths[n], camera.generate_ray({float(x) + jitter.x, float(y) + jitter.y}), sampler);
         px[n] = x;
         py[n] = y;
         if (++n == batch) flush();
       }
+    }
   if (n > 0) flush();
 }
 

@@ -134,8 +134,8 @@ inline void sample_bsdf(const PathTracerSettings& settings, PathState* st) {
   float u_lobe = st->sampler.next_1d();
   Vec2f u_dir = st->sampler.next_2d();
   BsdfSample bs;
-  if (!bsdf_sample(*st->bsdf, si.uv, si.wi, u_lobe, u_dir, &bs)) return;
-  if (bs.weight.is_black() || !is_finite(bs.weight)) return;
+  // bsdf_sample() returns only finite weights, pdfs and directions.
+  if (!bsdf_sample(*st->bsdf, si.uv, si.wi, u_lobe, u_dir, &bs) || bs.weight.is_black()) return;
   st->throughput *= bs.weight;
   st->eta *= bs.eta;
   Vec3f d = si.sh_frame.to_world(bs.wi);
