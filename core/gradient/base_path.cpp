@@ -16,7 +16,9 @@ void mark_dark_suffixes(PathRecord* record) {
   }
 }
 
-void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const CameraHit& first,
+// Flattened, as the path tracer's batch driver (path_batch.cpp): its callees are
+// inlined into the vertex loop (hit shading, light and BSDF sampling).
+[[gnu::flatten]] void trace_base_path(const FrameScene& scene, const PathTracerSettings& settings, const CameraHit& first,
                      Sampler& sampler, PathCounters& counters, PathRecord* record) {
   const Scene& desc = scene.scene();
   PathRecord& rec = *record;
