@@ -13,7 +13,7 @@ Vec2f direction_to_uv(Vec3f d) {
   float u = std::atan2(d.x, -d.z) * kInvTwoPi;
   float v = std::acos(std::clamp(d.y, -1.0f, 1.0f)) * kInvPi;
   // u is in [-1/2, 1/2]: u - floor(u) without floor (a libm call or a long
-  // inline sequence without SSE4.1; 6 % of PT's instructions on matpreview).
+  // inline sequence without SSE4.1).
   return {u < 0.0f ? u + 1.0f : u, v};
 }
 
@@ -187,10 +187,10 @@ Status FrameScene::prepare_emitters() {
           tri.p1 = m.positions[m.indices[3 * t + 1]];
           tri.p2 = m.positions[m.indices[3 * t + 2]];
           if (s.instanced) tri.p0 = s.to_world.point(tri.p0), tri.p1 = s.to_world.point(tri.p1), tri.p2 = s.to_world.point(tri.p2);
-          // The same expressions interaction() evaluates at a hit, so that a
-          // sampled point and a hit on it agree bit for bit.
-          tri.n = s.instanced ? normalize(s.to_world.normal(s.face_normals[t])) * s.handedness : s.face_normals[t];
-          tri.face_normal = s.flat[t] && (s.handedness > 0 || !s.vertex_normals);
+          // What interaction() evaluates at a hit, so that a sampled point and
+          // a hit on it agree bit for bit.
+          tri.n = world_face_normal(s, t);
+          tri.face_normal = shades_with_face_normal(s, t);
           if (shape.flip_normals) tri.n = -tri.n;
           areas[t] = triangle_area(tri.p0, tri.p1, tri.p2);
         }
@@ -274,7 +274,7 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
     if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
     si->p = p0 * b0 + p1 * b1 + p2 * b2;
     si->offset_floor = s.instanced ? triangle_offset_floor(p0, p1, p2) : s.offset_floors[hit.prim];
-    si->n = s.instanced ? normalize(s.to_world.normal(s.face_normals[hit.prim])) * s.handedness : s.face_normals[hit.prim];
+    si->n = world_face_normal(s, hit.prim);
     ns = shading_normal(s, hit.prim, b1, b2, si->n);
     si->uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
   }

@@ -148,8 +148,15 @@ class FrameScene {
   // mirroring instance transform the face normal flips but vertex normals do
   // not, so a flat triangle of a mesh with vertex normals interpolates then.
   Vec3f shading_normal(const ShapeState& s, uint32_t tri, float b1, float b2, Vec3f face_n) const {
-    if (s.flat[tri] && (s.handedness > 0 || !s.vertex_normals)) return face_n;
+    if (shades_with_face_normal(s, tri)) return face_n;
     return interpolated_normal(s, tri, b1, b2, face_n);
+  }
+  static bool shades_with_face_normal(const ShapeState& s, size_t tri) {
+    return s.flat[tri] && (s.handedness > 0 || !s.vertex_normals);
+  }
+  // Triangle `tri`'s unit face normal in world space (before flip_normals).
+  static Vec3f world_face_normal(const ShapeState& s, size_t tri) {
+    return s.instanced ? normalize(s.to_world.normal(s.face_normals[tri])) * s.handedness : s.face_normals[tri];
   }
   Vec3f interpolated_normal(const ShapeState& s, uint32_t tri, float b1, float b2, Vec3f face_n) const;
   float pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const;
