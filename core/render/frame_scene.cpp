@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/math/arctan.h"
 #include "core/math/sampling.h"
 
 namespace gdvr {
@@ -10,11 +11,10 @@ namespace {
 
 // Mitsuba's lat-long convention (envmap.cpp): u = atan2(x, -z) / 2pi, v = acos(y) / pi.
 Vec2f direction_to_uv(Vec3f d) {
-  float u = std::atan2(d.x, -d.z) * kInvTwoPi;
-  float v = std::acos(std::clamp(d.y, -1.0f, 1.0f)) * kInvPi;
+  const float u = atan2_turns(d.x, -d.z);
   // u is in [-1/2, 1/2]: u - floor(u) without floor (a libm call or a long
   // inline sequence without SSE4.1).
-  return {u < 0.0f ? u + 1.0f : u, v};
+  return {u < 0.0f ? u + 1.0f : u, acos_half_turns(d.y)};
 }
 
 Vec3f uv_to_direction(Vec2f uv, float* sin_theta) {
@@ -262,9 +262,8 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
     ns = local;
     // Sphere uv in the object frame (Mitsuba: phi / 2pi, theta / pi).
     Vec3f lo = normalize(s.to_object.vector(local));
-    float phi = std::atan2(lo.y, lo.x);
-    if (phi < 0) phi += 2.0f * kPi;
-    si->uv = {phi * kInvTwoPi, std::acos(std::clamp(lo.z, -1.0f, 1.0f)) * kInvPi};
+    const float phi = atan2_turns(lo.y, lo.x);
+    si->uv = {phi < 0.0f ? phi + 1.0f : phi, acos_half_turns(lo.z)};
     si->offset_floor = std::min(1.0f, max_abs_component(s.center) + s.radius);
   } else {
     const TriangleMesh& m = *s.mesh;
