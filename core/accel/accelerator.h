@@ -17,6 +17,12 @@
 
 namespace gdvr {
 
+// A ray and its interval, as the stream queries take it.
+struct RaySegment {
+  Vec3f origin, dir;
+  float tmin = 0, tmax = 0;
+};
+
 struct RayHit {
   float t = 0;
   int id = -1;         // the caller's geometry id
@@ -45,6 +51,17 @@ class Accelerator {
   // Any hit with t in (tmin, tmax); `instanced_only`: test only the geometry
   // added with instanced = true (Embree ray masks).
   bool occluded(Vec3f origin, Vec3f dir, float tmin, float tmax, bool instanced_only = false) const;
+
+  // The same queries for rays[0..n) at once, through Embree's stream
+  // interface (rtcIntersect1M / rtcOccluded1M): Embree traces the stream in
+  // SIMD packets, switching to single-ray traversal where the packet's rays
+  // part, which on the bundled scenes is 5-40 % faster per ray than n single
+  // queries (docs/foundation.md). found[i] and occluded[i] are what
+  // intersect() and occluded() return for rays[i]; hits agree with theirs
+  // (triangles bit for bit; a sphere's t to within an ulp or two, as its
+  // packet kernel rounds differently).
+  void intersect_stream(const RaySegment* rays, int n, RayHit* hits, bool* found) const;
+  void occluded_stream(const RaySegment* rays, int n, bool* occluded) const;
 
  private:
   struct Impl;

@@ -66,6 +66,28 @@ float triangle_offset_floor(Vec3f p0, Vec3f p1, Vec3f p2) {
   return std::min(1.0f, std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)}));
 }
 
+// The distance along `ray` to the sphere's root nearest Embree's `embree_t`,
+// solved in double. Embree's single-ray and packet kernels round a sphere's
+// t differently (by an ulp or two), so the hit point is computed here, from
+// the ray alone, and is the same whichever kernel found the hit (the path
+// tracer's batches cast streams, trace_path single rays: path_batch.h). The
+// discriminant is r^2 - |f|^2 with f the ray's closest approach to the
+// centre (pbrt-v4's form), which does not cancel for distant spheres.
+float sphere_hit_distance(const Ray& ray, Vec3f center, float radius, float embree_t) {
+  const double ox = double(ray.o.x) - center.x, oy = double(ray.o.y) - center.y, oz = double(ray.o.z) - center.z;
+  const double dx = ray.d.x, dy = ray.d.y, dz = ray.d.z;
+  const double dd = dx * dx + dy * dy + dz * dz;
+  if (!(dd > 0)) return embree_t;
+  const double mid = -(ox * dx + oy * dy + oz * dz) / dd;  // closest approach
+  const double fx = ox + mid * dx, fy = oy + mid * dy, fz = oz + mid * dz;
+  const double r = radius;
+  const double half_chord_sq = (r * r - (fx * fx + fy * fy + fz * fz)) / dd;
+  if (!(half_chord_sq > 0)) return float(mid);  // grazing: Embree hit within its rounding
+  const double half_chord = std::sqrt(half_chord_sq);
+  const double near = mid - half_chord, far = mid + half_chord;
+  return float(std::abs(near - embree_t) <= std::abs(far - embree_t) ? near : far);
+}
+
 }  // namespace
 
 Expected<std::unique_ptr<FrameScene>> FrameScene::create(const Scene& scene, const std::vector<bool>& animated) {
@@ -256,7 +278,8 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
   si->prim = hit.prim;
   Vec3f ns;
   if (shape.type == ShapeType::kSphere) {
-    Vec3f local = normalize(ray.o + ray.d * hit.t - s.center);
+    si->t = sphere_hit_distance(ray, s.center, s.radius, hit.t);
+    Vec3f local = normalize(ray.o + ray.d * si->t - s.center);
     si->p = s.center + local * s.radius;  // re-project: tighter than o + t d
     si->n = local;
     ns = local;

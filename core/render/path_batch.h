@@ -3,9 +3,11 @@
 // pending shadow ray, then the next bounce. One path at a time, each vertex's
 // shading is a chain of dependent square roots and divisions between two ray
 // casts that the core cannot overlap with anything; a batch gives it the
-// other paths' independent work to overlap, and keeps the traversal code hot
-// across consecutive casts. Each path's numbers and arithmetic are those of
-// trace_path(), so its radiance is the same bit for bit.
+// other paths' independent work to overlap. And the batch's rays of one kind
+// go to Embree as one stream, which it traces in SIMD packets, faster per
+// ray than one at a time (docs/foundation.md). Each path's numbers and
+// arithmetic are those of trace_path(), and the stream's hits those of single
+// casts, so its radiance is the same bit for bit.
 #pragma once
 
 #include <cstdint>
@@ -16,9 +18,6 @@
 #include "core/render/tile_scheduler.h"
 
 namespace gdvr {
-
-// Paths in flight per thread. Their states (~300 bytes each) stay in L1/L2.
-constexpr int kPathBatch = 64;
 
 // Advances paths[0..n) until each has finished; out[i] is path i's sample.
 void trace_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,

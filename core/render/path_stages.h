@@ -22,6 +22,11 @@
 
 namespace gdvr {
 
+// Paths in flight per thread in path_batch.h's batches, and the most rays
+// the stream casts below take at once. The states (~300 bytes each) stay in
+// L1/L2.
+constexpr int kPathBatch = 64;
+
 struct PathState {
   Sampler sampler;
   Ray ray;  // the ray to trace next
@@ -184,6 +189,55 @@ inline bool cast_shadow(const FrameScene& scene, const PathState& st, PathCounte
   ++counters.rays;
   if (counters.ray_log) counters.ray_log->push_back({st.shadow, true});
   return scene.occluded(st.shadow);
+}
+
+// The same casts for the paths paths[which[0..n)] (n <= kPathBatch) at once, as one stream
+// query (Accelerator::intersect_stream). The answers are those of the single
+// casts: triangle hits bit for bit, and a sphere's hit point is solved from
+// the ray in FrameScene::interaction, not taken from the kernel's rounding.
+inline void log_stream(const PathState* paths, const int* which, int n, bool shadow, PathCounters& counters) {
+  counters.rays += uint64_t(n);
+  if (!counters.ray_log) return;
+  const uint32_t stream = ++counters.streams_logged;
+  for (int k = 0; k < n; ++k) {
+    const PathState& st = paths[which[k]];
+    counters.ray_log->push_back({shadow ? st.shadow : st.ray, shadow, stream});
+  }
+}
+
+// Room for one stream query's rays and answers; made once per batch, not
+// per cast (its arrays would be default-initialised at every cast).
+struct RayStream {
+  RaySegment rays[kPathBatch];
+  RayHit hits[kPathBatch];
+  bool answers[kPathBatch];
+};
+
+inline void cast_closest_stream(const FrameScene& scene, PathState* paths, const int* which, int n,
+                                RayStream& stream, PathCounters& counters) {
+  log_stream(paths, which, n, false, counters);
+  for (int k = 0; k < n; ++k) {
+    const Ray& r = paths[which[k]].ray;
+    stream.rays[k] = {r.o, r.d, r.tmin, r.tmax};
+  }
+  scene.accelerator().intersect_stream(stream.rays, n, stream.hits, stream.answers);
+  for (int k = 0; k < n; ++k) {
+    PathState& st = paths[which[k]];
+    st.hit = stream.answers[k];
+    if (st.hit) scene.interaction(st.ray, stream.hits[k], &st.si);
+  }
+}
+
+// resolve_shadow() for each of paths[which[0..n)].
+inline void cast_shadow_stream_and_resolve(const FrameScene& scene, PathState* paths, const int* which, int n,
+                                           RayStream& stream, PathCounters& counters) {
+  log_stream(paths, which, n, true, counters);
+  for (int k = 0; k < n; ++k) {
+    const Ray& r = paths[which[k]].shadow;
+    stream.rays[k] = {r.o, r.d, r.tmin, r.tmax};
+  }
+  scene.accelerator().occluded_stream(stream.rays, n, stream.answers);
+  for (int k = 0; k < n; ++k) resolve_shadow(stream.answers[k], &paths[which[k]]);
 }
 
 }  // namespace gdvr

@@ -7,9 +7,12 @@
 //    reports rays/s.
 // 2. Records every ray that render traced (same scene, seed, spp, tiles),
 //    in the order the path tracer cast them and in path order, then replays
-//    exactly those rays through the accelerator's bare Embree calls
-//    (rtcIntersect1 / rtcOccluded1, no shading), on the same thread count.
-// The ratio of (1) to the faster of the two replays in (2) is the share of the
+//    exactly those rays through the accelerator's bare Embree calls (no
+//    shading), on the same thread count, three ways: one ray per call
+//    (rtcIntersect1 / rtcOccluded1) in cast order and in path order, and in
+//    cast order as the streams the path tracer cast them in (rtcIntersect1M /
+//    rtcOccluded1M).
+// The ratio of (1) to the fastest replay in (2) is the share of the
 // ray-casting limit the path tracer reaches. Each figure is the median of --runs runs measured in the same process.
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -78,8 +81,9 @@ std::vector<RecordedRay> record_rays(const FrameScene& scene, const FrameRenderS
   return rays;
 }
 
-// Casts `rays` through the accelerator's bare Embree calls; returns rays/s.
-double replay_bare(const Accelerator& accel, const std::vector<RecordedRay>& rays, tbb::task_arena& arena) {
+// Casts `rays` one per call through the accelerator's bare Embree calls;
+// returns rays/s.
+double replay_single(const Accelerator& accel, const std::vector<RecordedRay>& rays, tbb::task_arena& arena) {
   std::atomic<uint64_t> hits{0};
   auto t0 = std::chrono::steady_clock::now();
   arena.execute([&] {
@@ -92,6 +96,57 @@ double replay_bare(const Accelerator& accel, const std::vector<RecordedRay>& ray
         else local += accel.intersect(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax, &hit);
       }
       hits += local;  // keeps the loop from being optimised away
+    });
+  });
+  const double rate = double(rays.size()) / seconds_since(t0);
+  if (hits.load() == 0) std::fprintf(stderr, "gdvr-bench: warning: no ray hit anything\n");
+  return rate;
+}
+
+bool rays_differ_in_kind(const std::vector<RecordedRay>& rays, size_t begin, size_t end) {
+  for (size_t i = begin + 1; i < end; ++i)
+    if (rays[i].shadow != rays[begin].shadow) return true;
+  return false;
+}
+
+// [begin, end) of each stream of `rays` (RecordedRay::stream); a ray cast
+// on its own is a group of one.
+std::vector<std::pair<size_t, size_t>> stream_groups(const std::vector<RecordedRay>& rays) {
+  std::vector<std::pair<size_t, size_t>> groups;
+  for (size_t i = 0; i < rays.size();) {
+    size_t end = i + 1;
+    if (rays[i].stream != 0)
+      while (end < rays.size() && rays[end].stream == rays[i].stream) ++end;
+    groups.emplace_back(i, end);
+    i = end;
+  }
+  return groups;
+}
+
+// Casts each group of `rays` as one stream query, as the path tracer did;
+// returns rays/s.
+double replay_streams(const Accelerator& accel, const std::vector<RecordedRay>& rays,
+                      const std::vector<std::pair<size_t, size_t>>& groups, tbb::task_arena& arena) {
+  std::atomic<uint64_t> hits{0};
+  auto t0 = std::chrono::steady_clock::now();
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size(), 64), [&](const tbb::blocked_range<size_t>& br) {
+      uint64_t local = 0;
+      RaySegment segments[kPathBatch];
+      RayHit found_hits[kPathBatch];
+      bool answers[kPathBatch];
+      for (size_t g = br.begin(); g != br.end(); ++g) {
+        const auto [begin, end] = groups[g];
+        const int n = int(end - begin);
+        for (int k = 0; k < n; ++k) {
+          const Ray& r = rays[begin + size_t(k)].ray;
+          segments[k] = {r.o, r.d, r.tmin, r.tmax};
+        }
+        if (rays[begin].shadow) accel.occluded_stream(segments, n, answers);
+        else accel.intersect_stream(segments, n, found_hits, answers);
+        for (int k = 0; k < n; ++k) local += answers[k];
+      }
+      hits += local;
     });
   });
   const double rate = double(rays.size()) / seconds_since(t0);
@@ -152,7 +207,13 @@ int main(int argc, char** argv) {
   }
   const Accelerator& accel = frame_scene.accelerator();
   tbb::task_arena arena(thread_count);
-  std::vector<double> pt_rate, single_rate, cast_rate, path_rate, ratios, gains;
+  const std::vector<std::pair<size_t, size_t>> groups = stream_groups(cast_order);
+  for (const auto& [begin, end] : groups)
+    if (end - begin > size_t(kPathBatch) || (end - begin > 1 && rays_differ_in_kind(cast_order, begin, end))) {
+      std::fprintf(stderr, "gdvr-bench: a recorded stream is longer than %d rays or mixes kinds\n", kPathBatch);
+      return 1;
+    }
+  std::vector<double> pt_rate, single_rate, cast_rate, path_rate, stream_rate, ratios, gains;
   uint64_t pt_rays = 0;
   for (int r = 0; r < runs; ++r) {
     auto result = render_frame_pt(frame_scene, s, 0, {});
@@ -166,9 +227,10 @@ int main(int argc, char** argv) {
     if (!one.ok()) { std::fprintf(stderr, "gdvr-bench: %s\n", one.status().to_string().c_str()); return 1; }
     single_rate.push_back(double(one->rays) / one->seconds);
     gains.push_back(pt_rate.back() / single_rate.back());
-    cast_rate.push_back(replay_bare(accel, cast_order, arena));
-    path_rate.push_back(replay_bare(accel, path_order, arena));
-    ratios.push_back(pt_rate.back() / std::max(cast_rate.back(), path_rate.back()));
+    cast_rate.push_back(replay_single(accel, cast_order, arena));
+    path_rate.push_back(replay_single(accel, path_order, arena));
+    stream_rate.push_back(replay_streams(accel, cast_order, groups, arena));
+    ratios.push_back(pt_rate.back() / std::max({cast_rate.back(), path_rate.back(), stream_rate.back()}));
   }
 
   std::printf("scene            %s\n", path.c_str());
@@ -178,9 +240,9 @@ int main(int argc, char** argv) {
               s.paths_in_flight);
   std::printf("  one at a time  %.2f Mrays/s (batched / one at a time: %.3f, median of per-run ratios)\n",
               median(single_rate) * 1e-6, median(gains));
-  std::printf("bare Embree      %.2f Mrays/s in cast order, %.2f in path order\n", median(cast_rate) * 1e-6,
-              median(path_rate) * 1e-6);
-  std::printf("ratio            %.3f (median of per-run ratios to the faster bare order)\n", median(ratios));
+  std::printf("bare Embree      %.2f Mrays/s as the tracer's streams (%zu); single rays: %.2f in cast order, %.2f in path order\n",
+              median(stream_rate) * 1e-6, groups.size(), median(cast_rate) * 1e-6, median(path_rate) * 1e-6);
+  std::printf("ratio            %.3f (median of per-run ratios to the fastest bare replay)\n", median(ratios));
   double loadavg[1] = {0};
   if (getloadavg(loadavg, 1) == 1) std::printf("load average     %.2f\n", loadavg[0]);
   return 0;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <random>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -92,6 +93,54 @@ TEST_P(PathBatchTest, RenderDoesNotDependOnPathsInFlight) {
     EXPECT_EQ(0, std::memcmp(results[0].variance.data().data(), results[k].variance.data().data(),
                              results[0].variance.data().size() * sizeof(float)));
   }
+}
+
+// Embree's packet kernel rounds a sphere's t differently from its single-ray
+// kernel; the hit point must not inherit that (FrameScene::interaction solves
+// it from the ray), or batched and single paths would part at sphere hits.
+TEST(PathBatchSphereTest, SphereHitsAreTheSameFromStreamsAndSingleCasts) {
+  auto ts = load_test_scene("veach-mis", kW, kH);
+  const FrameScene& scene = *ts->scene;
+  std::vector<Ray> rays;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  for (const Shape& shape : ts->desc.shapes) {
+    if (shape.type != ShapeType::kSphere) continue;
+    const Vec3f center = shape.to_world.point(Vec3f(0, 0, 0));
+    const float radius = length(shape.to_world.vector(Vec3f(1, 0, 0)));
+    for (int i = 0; i < 600; ++i) {
+      const Vec3f origin = center + Vec3f(unit(rng), unit(rng), unit(rng)) * (8.0f * radius + 2.0f);
+      const Vec3f target = center + Vec3f(unit(rng), unit(rng), unit(rng)) * (0.55f * radius);
+      rays.push_back(Ray{origin, normalize(target - origin), 0.0f, kInfinity});
+    }
+  }
+  ASSERT_GE(rays.size(), size_t(1200));
+  int sphere_hits = 0;
+  for (size_t base = 0; base < rays.size(); base += kPathBatch) {
+    const int n = int(std::min(rays.size() - base, size_t(kPathBatch)));
+    RaySegment segments[kPathBatch];
+    RayHit hits[kPathBatch];
+    bool found[kPathBatch];
+    for (int k = 0; k < n; ++k) {
+      const Ray& r = rays[base + size_t(k)];
+      segments[k] = {r.o, r.d, r.tmin, r.tmax};
+    }
+    scene.accelerator().intersect_stream(segments, n, hits, found);
+    for (int k = 0; k < n; ++k) {
+      const Ray& r = rays[base + size_t(k)];
+      SurfaceInteraction single, streamed;
+      ASSERT_EQ(scene.intersect(r, &single), found[k]);
+      if (!found[k]) continue;
+      scene.interaction(r, hits[k], &streamed);
+      ASSERT_EQ(single.shape, streamed.shape);
+      if (ts->desc.shapes[size_t(single.shape)].type != ShapeType::kSphere) continue;
+      ++sphere_hits;
+      EXPECT_EQ(0, std::memcmp(&single.p, &streamed.p, sizeof(Vec3f))) << "ray " << base + size_t(k);
+      EXPECT_EQ(0, std::memcmp(&single.n, &streamed.n, sizeof(Vec3f))) << "ray " << base + size_t(k);
+      EXPECT_EQ(0, std::memcmp(&single.uv, &streamed.uv, sizeof(Vec2f))) << "ray " << base + size_t(k);
+    }
+  }
+  EXPECT_GT(sphere_hits, int(rays.size()) / 2);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, PathBatchTest, ::testing::Values("cbox", "veach-mis", "matpreview"),

@@ -1,0 +1,123 @@
+// Accelerator's stream queries (intersect_stream, occluded_stream) against
+// its single-ray queries on the same rays: the path tracer's batches cast
+// streams and trace_path single rays, and both must see the same scene.
+#include "core/accel/accelerator.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace gdvr {
+namespace {
+
+// A soup of random triangles, two static spheres and an instanced (animated)
+// sphere and mesh: every geometry type and both levels of the BVH.
+std::unique_ptr<Accelerator> make_scene(std::vector<int>* sphere_ids) {
+  auto accel = Accelerator::create();
+  EXPECT_TRUE(accel.ok());
+  std::unique_ptr<Accelerator> a = std::move(accel.value());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> pos(-2.0f, 2.0f), jitter(-0.4f, 0.4f);
+  std::vector<Vec3f> vertices;
+  std::vector<uint32_t> indices;
+  for (int t = 0; t < 300; ++t) {
+    const Vec3f c(pos(rng), pos(rng), pos(rng));
+    for (int k = 0; k < 3; ++k) {
+      indices.push_back(uint32_t(vertices.size()));
+      vertices.push_back(c + Vec3f(jitter(rng), jitter(rng), jitter(rng)));
+    }
+  }
+  EXPECT_TRUE(a->add_mesh(0, vertices.data(), vertices.size(), indices.data(), indices.size() / 3, false, Transform())
+                  .ok());
+  EXPECT_TRUE(a->add_sphere(1, Vec3f(0.5f, 0.2f, -0.3f), 0.7f, false, Transform()).ok());
+  EXPECT_TRUE(a->add_sphere(2, Vec3f(-1.2f, 1.0f, 0.9f), 0.25f, false, Transform()).ok());
+  EXPECT_TRUE(a->add_sphere(3, Vec3f(0, 0, 0), 0.4f, true, Transform::translate(Vec3f(1.1f, -1.3f, 0.6f))).ok());
+  EXPECT_TRUE(a->add_mesh(4, vertices.data(), 30, indices.data(), 10, true, Transform::translate(Vec3f(0.3f, 0, 0)))
+                  .ok());
+  EXPECT_TRUE(a->commit().ok());
+  *sphere_ids = {1, 2, 3};
+  return a;
+}
+
+std::vector<RaySegment> random_rays(int n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-3.0f, 3.0f), aim(-2.0f, 2.0f), len(0.5f, 6.0f);
+  std::vector<RaySegment> rays(static_cast<size_t>(n));
+  for (RaySegment& r : rays) {
+    r.origin = Vec3f(pos(rng), pos(rng), pos(rng));
+    // Towards a point of the scene's box: most rays meet something.
+    r.dir = normalize(Vec3f(aim(rng), aim(rng), aim(rng)) - r.origin);
+    r.tmin = 1e-4f;
+    r.tmax = (rng() % 3 == 0) ? std::numeric_limits<float>::infinity() : len(rng);
+  }
+  return rays;
+}
+
+bool is_sphere(const std::vector<int>& sphere_ids, int id) {
+  return std::find(sphere_ids.begin(), sphere_ids.end(), id) != sphere_ids.end();
+}
+
+TEST(AcceleratorStreamTest, ClosestHitsMatchSingleRayQueries) {
+  std::vector<int> spheres;
+  auto accel = make_scene(&spheres);
+  int hits = 0, misses = 0, sphere_hits = 0;
+  // 1 (the single-query shortcut), small, one full chunk, and more than one chunk.
+  for (int n : {1, 2, 17, 64, 150, 1000}) {
+    const std::vector<RaySegment> rays = random_rays(n, uint32_t(n));
+    std::vector<RayHit> stream_hits(static_cast<size_t>(n));
+    std::unique_ptr<bool[]> found(new bool[static_cast<size_t>(n)]);
+    accel->intersect_stream(rays.data(), n, stream_hits.data(), found.get());
+    for (int i = 0; i < n; ++i) {
+      const RaySegment& r = rays[size_t(i)];
+      RayHit single;
+      const bool single_found = accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &single);
+      ASSERT_EQ(found[size_t(i)], single_found) << "n " << n << " ray " << i;
+      if (!single_found) {
+        ++misses;
+        continue;
+      }
+      ++hits;
+      const RayHit& h = stream_hits[size_t(i)];
+      ASSERT_EQ(h.id, single.id) << "n " << n << " ray " << i;
+      ASSERT_EQ(h.prim, single.prim);
+      if (is_sphere(spheres, h.id)) {
+        // Embree's packet kernel rounds a sphere's t differently.
+        ++sphere_hits;
+        EXPECT_NEAR(h.t, single.t, 4e-6f * single.t) << "n " << n << " ray " << i;
+      } else {
+        EXPECT_EQ(h.t, single.t) << "n " << n << " ray " << i;
+        EXPECT_EQ(h.u, single.u);
+        EXPECT_EQ(h.v, single.v);
+      }
+    }
+  }
+  // The rays must exercise every outcome.
+  EXPECT_GT(hits, 400);
+  EXPECT_GT(misses, 300);
+  EXPECT_GT(sphere_hits, 60);
+}
+
+TEST(AcceleratorStreamTest, OcclusionMatchesSingleRayQueries) {
+  std::vector<int> spheres;
+  auto accel = make_scene(&spheres);
+  int blocked = 0, clear = 0;
+  for (int n : {1, 3, 64, 65, 1000}) {
+    const std::vector<RaySegment> rays = random_rays(n, 1000u + uint32_t(n));
+    std::unique_ptr<bool[]> occluded(new bool[static_cast<size_t>(n)]);
+    accel->occluded_stream(rays.data(), n, occluded.get());
+    for (int i = 0; i < n; ++i) {
+      const RaySegment& r = rays[size_t(i)];
+      ASSERT_EQ(occluded[size_t(i)], accel->occluded(r.origin, r.dir, r.tmin, r.tmax)) << "n " << n << " ray " << i;
+      (occluded[size_t(i)] ? blocked : clear)++;
+    }
+  }
+  EXPECT_GT(blocked, 100);
+  EXPECT_GT(clear, 100);
+}
+
+}  // namespace
+}  // namespace gdvr
