@@ -59,7 +59,8 @@ class Accelerator {
   // queries (docs/foundation.md). found[i] and occluded[i] are what
   // intersect() and occluded() return for rays[i]; hits agree with theirs
   // (triangles bit for bit; a sphere's t to within an ulp or two, as its
-  // packet kernel rounds differently).
+  // packet kernel rounds differently). Streams test all geometry (there is
+  // no instanced_only form).
   void intersect_stream(const RaySegment* rays, int n, RayHit* hits, bool* found) const;
   void occluded_stream(const RaySegment* rays, int n, bool* occluded) const;
 
