@@ -5,7 +5,7 @@
 
 namespace gdvr {
 
-void CameraHitCache::begin(const Tile& tile, Vec2f jitter) {
+void CameraHitCache::begin(const Tile& tile, Vec2f jitter, PathCounters& counters) {
   x0_ = tile.x0 - 1;
   y0_ = tile.y0 - 1;
   width_ = tile.x1 - tile.x0 + 2;
@@ -14,6 +14,36 @@ void CameraHitCache::begin(const Tile& tile, Vec2f jitter) {
   const size_t n = size_t(width_) * size_t(height_);
   if (hits_.size() < n) hits_.resize(n);
   traced_.assign(n, 0);
+  // The tile's own pixels, which every base path asks for, as streams of a
+  // row at a time (Accelerator::intersect_stream: the same hits as single
+  // casts, and camera rays are coherent).
+  constexpr int kChunk = 64;
+  RaySegment rays[kChunk];
+  RayHit hits[kChunk];
+  bool found[kChunk];
+  int xs[kChunk], ys[kChunk];
+  int m = 0;
+  auto flush = [&] {
+    scene_.accelerator().intersect_stream(rays, m, hits, found);
+    counters.rays += uint64_t(m);
+    for (int k = 0; k < m; ++k) {
+      const size_t i = size_t(ys[k] - y0_) * size_t(width_) + size_t(xs[k] - x0_);
+      CameraHit& h = hits_[i];
+      h.ray = Ray{rays[k].origin, rays[k].dir, rays[k].tmin, rays[k].tmax};
+      h.hit = found[k];
+      if (found[k]) scene_.interaction(h.ray, hits[k], &h.si);
+      traced_[i] = 1;
+    }
+    m = 0;
+  };
+  for (int y = tile.y0; y < tile.y1; ++y)
+    for (int x = tile.x0; x < tile.x1; ++x) {
+      const Ray r = camera_.generate_ray({float(x) + jitter_.x, float(y) + jitter_.y});
+      rays[m] = {r.o, r.d, r.tmin, r.tmax};
+      xs[m] = x, ys[m] = y;
+      if (++m == kChunk) flush();
+    }
+  if (m > 0) flush();
 }
 
 const CameraHit& CameraHitCache::at(int x, int y, PathCounters& counters) {

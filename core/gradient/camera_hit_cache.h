@@ -5,9 +5,9 @@
 // exactly the camera ray of j's own base path, and one intersection (and its
 // shading data) serves the base path and the up to four offsets into j.
 //
-// Entries are traced on first use: pixels of the tile always (their base
-// paths), ring pixels only when an offset asks (cached-path Russian roulette
-// skips most offsets of dark pixels). The result is a pure function of the
+// The tile's pixels are traced up front, in Embree streams (every base path
+// needs its own); ring pixels on first use, only when an offset asks
+// (cached-path Russian roulette skips most offsets of dark pixels). The result is a pure function of the
 // ray, so which tile traced a ring pixel does not change the image.
 #pragma once
 
@@ -25,8 +25,9 @@ class CameraHitCache {
 
   // Starts sample index `s` over `tile` (plus a one-pixel ring) with film
   // position (x + jitter.x, y + jitter.y) for pixel (x, y); forgets the
-  // previous entries without freeing their storage.
-  void begin(const Tile& tile, Vec2f jitter);
+  // previous entries without freeing their storage, and traces the tile's
+  // own pixels (counted in `counters`).
+  void begin(const Tile& tile, Vec2f jitter, PathCounters& counters);
 
   // The first hit of pixel (x, y)'s camera ray; (x, y) must lie in the tile or
   // its ring. The reference stays valid until the next begin().

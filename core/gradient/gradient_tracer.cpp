@@ -23,7 +23,7 @@ void GradientTracer::begin_sample(const Tile& tile, uint32_t s) {
   // shared position, so it is independent of every pixel's own stream.
   Sampler shared(seed_, frame_, ~0u, ~0u, s);
   shared_jitter_ = shared.next_2d();
-  camera_hits_.begin(tile, shared_jitter_);
+  camera_hits_.begin(tile, shared_jitter_, counters_);
 }
 
 void GradientTracer::sample(int x, int y, GradientSample* out) {
