@@ -21,26 +21,25 @@ void CameraHitCache::begin(const Tile& tile, Vec2f jitter, PathCounters& counter
   RaySegment rays[kChunk];
   RayHit hits[kChunk];
   bool found[kChunk];
-  int xs[kChunk], ys[kChunk];
+  size_t entry[kChunk];  // index into hits_
   int m = 0;
   auto flush = [&] {
     scene_.accelerator().intersect_stream(rays, m, hits, found);
     counters.rays += uint64_t(m);
     for (int k = 0; k < m; ++k) {
-      const size_t i = size_t(ys[k] - y0_) * size_t(width_) + size_t(xs[k] - x0_);
-      CameraHit& h = hits_[i];
-      h.ray = Ray{rays[k].origin, rays[k].dir, rays[k].tmin, rays[k].tmax};
+      CameraHit& h = hits_[entry[k]];
       h.hit = found[k];
       if (found[k]) scene_.interaction(h.ray, hits[k], &h.si);
-      traced_[i] = 1;
+      traced_[entry[k]] = 1;
     }
     m = 0;
   };
   for (int y = tile.y0; y < tile.y1; ++y)
     for (int x = tile.x0; x < tile.x1; ++x) {
-      const Ray r = camera_.generate_ray({float(x) + jitter_.x, float(y) + jitter_.y});
-      rays[m] = {r.o, r.d, r.tmin, r.tmax};
-      xs[m] = x, ys[m] = y;
+      entry[m] = size_t(y - y0_) * size_t(width_) + size_t(x - x0_);
+      CameraHit& h = hits_[entry[m]];
+      h.ray = camera_.generate_ray({float(x) + jitter_.x, float(y) + jitter_.y});
+      rays[m] = segment_of(h.ray);
       if (++m == kChunk) flush();
     }
   if (m > 0) flush();

@@ -216,10 +216,7 @@ struct RayStream {
 inline void cast_closest_stream(const FrameScene& scene, PathState* paths, const int* which, int n,
                                 RayStream& stream, PathCounters& counters) {
   log_stream(paths, which, n, false, counters);
-  for (int k = 0; k < n; ++k) {
-    const Ray& r = paths[which[k]].ray;
-    stream.rays[k] = {r.o, r.d, r.tmin, r.tmax};
-  }
+  for (int k = 0; k < n; ++k) stream.rays[k] = segment_of(paths[which[k]].ray);
   scene.accelerator().intersect_stream(stream.rays, n, stream.hits, stream.answers);
   for (int k = 0; k < n; ++k) {
     PathState& st = paths[which[k]];
@@ -232,10 +229,7 @@ inline void cast_closest_stream(const FrameScene& scene, PathState* paths, const
 inline void cast_shadow_stream_and_resolve(const FrameScene& scene, PathState* paths, const int* which, int n,
                                            RayStream& stream, PathCounters& counters) {
   log_stream(paths, which, n, true, counters);
-  for (int k = 0; k < n; ++k) {
-    const Ray& r = paths[which[k]].shadow;
-    stream.rays[k] = {r.o, r.d, r.tmin, r.tmax};
-  }
+  for (int k = 0; k < n; ++k) stream.rays[k] = segment_of(paths[which[k]].shadow);
   scene.accelerator().occluded_stream(stream.rays, n, stream.answers);
   for (int k = 0; k < n; ++k) resolve_shadow(stream.answers[k], &paths[which[k]]);
 }

@@ -140,7 +140,7 @@ double replay_streams(const Accelerator& accel, const std::vector<RecordedRay>& 
         const int n = int(end - begin);
         for (int k = 0; k < n; ++k) {
           const Ray& r = rays[begin + size_t(k)].ray;
-          segments[k] = {r.o, r.d, r.tmin, r.tmax};
+          segments[k] = segment_of(r);
         }
         if (rays[begin].shadow) accel.occluded_stream(segments, n, answers);
         else accel.intersect_stream(segments, n, found_hits, answers);

@@ -123,7 +123,7 @@ TEST(PathBatchSphereTest, SphereHitsAreTheSameFromStreamsAndSingleCasts) {
     bool found[kPathBatch];
     for (int k = 0; k < n; ++k) {
       const Ray& r = rays[base + size_t(k)];
-      segments[k] = {r.o, r.d, r.tmin, r.tmax};
+      segments[k] = segment_of(r);
     }
     scene.accelerator().intersect_stream(segments, n, hits, found);
     for (int k = 0; k < n; ++k) {
