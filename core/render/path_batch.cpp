@@ -13,7 +13,7 @@ namespace {
     prefetch_for_next_vertex(scene, paths[i]);
     live[count++] = i;
   }
-  cast_closest_stream(scene, paths, live, count, stream, counters);
+  cast_closest_stream(scene, settings, paths, live, count, stream, counters);
   while (count > 0) {
     // Each stage is its own loop: its body is short enough that the core runs
     // several paths' chains of square roots and divisions at once.
@@ -39,7 +39,7 @@ namespace {
       live[count++] = live[k];
     }
     if (pending > 0) cast_shadow_stream_and_resolve(scene, paths, shadowed, pending, stream, counters);
-    if (count > 0) cast_closest_stream(scene, paths, live, count, stream, counters);
+    if (count > 0) cast_closest_stream(scene, settings, paths, live, count, stream, counters);
   }
   for (int i = 0; i < n; ++i) out[i] = finish_path(paths[i], counters);
 }

@@ -10,7 +10,7 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
   start_path(&st, camera_ray, sampler);
   do {
     prefetch_for_next_vertex(scene, st);
-    cast_closest(scene, &st, counters);
+    cast_closest(scene, settings, &st, counters);
     add_emission(scene, settings, &st);
     if (!st.continues) break;
     sample_emitter(scene, &st);

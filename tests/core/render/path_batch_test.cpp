@@ -143,6 +143,67 @@ TEST(PathBatchSphereTest, SphereHitsAreTheSameFromStreamsAndSingleCasts) {
   EXPECT_GT(sphere_hits, int(rays.size()) / 2);
 }
 
+// At a path's last vertex (max_depth) take_hit() skips the shading data of a
+// hit on a shape that emits nothing. What add_emission() then adds, and
+// whether the path goes on, must be exactly what the full interaction gives;
+// a hit on an emitter must still get the full interaction.
+TEST(PathStagesTest, LastVertexShortcutAddsWhatTheFullInteractionAdds) {
+  auto ts = load_test_scene("veach-mis", kW, kH);  // max_depth 3, sphere and mesh emitters
+  const FrameScene& scene = *ts->scene;
+  const PathTracerSettings settings = ts->render.path;
+  ASSERT_GE(settings.max_depth, 1);
+  PerspectiveCamera camera(ts->desc.camera, kW, kH);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<Ray> rays;
+  for (int i = 0; i < 400; ++i) rays.push_back(camera.generate_ray({unit(rng) * kW, unit(rng) * kH}));
+  // Rays aimed at each emitting shape, so that emitter hits are many.
+  for (size_t i = 0; i < ts->desc.shapes.size(); ++i) {
+    if (scene.emitter_of_shape(int(i)) < 0) continue;
+    const Vec3f target = ts->desc.shapes[i].to_world.point(Vec3f(0, 0, 0));
+    for (int k = 0; k < 100; ++k) {
+      const Ray from_camera = camera.generate_ray({unit(rng) * kW, unit(rng) * kH});
+      const Vec3f origin = from_camera.o + from_camera.d * (0.5f * unit(rng));
+      rays.push_back(Ray{origin, normalize(target - origin), 0.0f, kInfinity});
+    }
+  }
+  int emitter_hits = 0, other_hits = 0;
+  for (const Ray& ray : rays) {
+    RayHit hit;
+    if (!scene.intersect_hit(ray, &hit)) continue;
+    for (int depth : {settings.max_depth - 1, std::max(0, settings.max_depth - 2)}) {
+      PathState shortcut, full;
+      for (PathState* st : {&shortcut, &full}) {
+        start_path(st, ray, Sampler(7, 0, 1, 2, 3));
+        st->depth = depth;
+        st->throughput = Rgb(0.5f, 0.25f, 2.0f);
+        st->prev_p = ray.o;
+        st->prev_bsdf_pdf = 0.7f;
+        st->prev_bsdf_delta = false;
+        st->hit = true;
+      }
+      take_hit(scene, settings, hit, &shortcut);
+      scene.interaction(ray, hit, &full.si);
+      const bool last = depth + 1 >= settings.max_depth;
+      const bool emits = scene.emitter_of_shape(hit.id) >= 0;
+      if (last) (emits ? emitter_hits : other_hits) += 1;
+      if (!last || emits) {  // the full interaction, bit for bit
+        ASSERT_EQ(0, std::memcmp(&shortcut.si.p, &full.si.p, sizeof(Vec3f)));
+        ASSERT_EQ(0, std::memcmp(&shortcut.si.wi, &full.si.wi, sizeof(Vec3f)));
+        ASSERT_EQ(0, std::memcmp(&shortcut.si.uv, &full.si.uv, sizeof(Vec2f)));
+      }
+      add_emission(scene, settings, &shortcut);
+      add_emission(scene, settings, &full);
+      EXPECT_TRUE(same_bits(shortcut.result, full.result));
+      EXPECT_TRUE(same_bits(shortcut.direct, full.direct));
+      EXPECT_EQ(shortcut.continues, full.continues);
+      EXPECT_EQ(shortcut.continues, !last);
+    }
+  }
+  EXPECT_GT(emitter_hits, 100);
+  EXPECT_GT(other_hits, 100);
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, PathBatchTest, ::testing::Values("cbox", "veach-mis", "matpreview"),
                          [](const auto& info) {
                            std::string n = info.param;
