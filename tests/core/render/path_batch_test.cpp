@@ -182,7 +182,7 @@ TEST(PathStagesTest, LastVertexShortcutAddsWhatTheFullInteractionAdds) {
         st->prev_bsdf_delta = false;
         st->hit = true;
       }
-      take_hit(scene, settings, hit, &shortcut);
+      take_hit(scene, last_vertex_depth(settings), hit, &shortcut);
       scene.interaction(ray, hit, &full.si);
       const bool last = depth + 1 >= settings.max_depth;
       const bool emits = scene.emitter_of_shape(hit.id) >= 0;
