@@ -3,6 +3,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -210,9 +211,35 @@ bool read_hit(const RTCRayHit& rh, RayHit* hit) {
 // rtcOccluded sets tfar to -inf on a hit.
 bool read_occluded(const RTCRay& ray) { return ray.tfar == -std::numeric_limits<float>::infinity(); }
 
-// Streams go to Embree in chunks of this many rays (on the stack: 5 KB of
-// RTCRayHit); the path tracer's batches are no longer.
-constexpr int kStreamChunk = 64;
+// RayStreamBuffer's records are Embree's RTCRayHit, field for field.
+using StreamRecord = RayStreamBuffer::Record;
+static_assert(sizeof(StreamRecord) == sizeof(RTCRayHit) && alignof(StreamRecord) == alignof(RTCRayHit));
+#define GDVR_SAME_OFFSET(ours, theirs) static_assert(offsetof(StreamRecord, ours) == offsetof(RTCRayHit, theirs))
+GDVR_SAME_OFFSET(org_x, ray.org_x);
+GDVR_SAME_OFFSET(org_y, ray.org_y);
+GDVR_SAME_OFFSET(org_z, ray.org_z);
+GDVR_SAME_OFFSET(tnear, ray.tnear);
+GDVR_SAME_OFFSET(dir_x, ray.dir_x);
+GDVR_SAME_OFFSET(dir_y, ray.dir_y);
+GDVR_SAME_OFFSET(dir_z, ray.dir_z);
+GDVR_SAME_OFFSET(time, ray.time);
+GDVR_SAME_OFFSET(tfar, ray.tfar);
+GDVR_SAME_OFFSET(mask, ray.mask);
+GDVR_SAME_OFFSET(id, ray.id);
+GDVR_SAME_OFFSET(flags, ray.flags);
+GDVR_SAME_OFFSET(ng_x, hit.Ng_x);
+GDVR_SAME_OFFSET(ng_y, hit.Ng_y);
+GDVR_SAME_OFFSET(ng_z, hit.Ng_z);
+GDVR_SAME_OFFSET(u, hit.u);
+GDVR_SAME_OFFSET(v, hit.v);
+GDVR_SAME_OFFSET(prim_id, hit.primID);
+GDVR_SAME_OFFSET(geom_id, hit.geomID);
+GDVR_SAME_OFFSET(inst_id, hit.instID[0]);
+#undef GDVR_SAME_OFFSET
+static_assert(RTC_MAX_INSTANCE_LEVEL_COUNT == 1 && RayStreamBuffer::kInvalidId == RTC_INVALID_GEOMETRY_ID);
+
+// Embree reads and answers the records in place (they are its own type).
+RTCRayHit* embree_records(RayStreamBuffer::Record* records) { return reinterpret_cast<RTCRayHit*>(records); }
 
 }  // namespace
 
@@ -235,42 +262,43 @@ bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax, bool instan
   return read_occluded(ray);
 }
 
-void Accelerator::intersect_stream(const RaySegment* rays, int n, RayHit* hits, bool* found) const {
-  if (n == 1) {  // a stream of one is the single query (the stream set-up buys nothing)
-    found[0] = intersect(rays[0].origin, rays[0].dir, rays[0].tmin, rays[0].tmax, &hits[0]);
-    return;
-  }
+void Accelerator::intersect_stream(RayStreamBuffer& rays, int n) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);  // incoherent: the coherent flag's sorting was 2x slower here
-  RTCRayHit rh[kStreamChunk];
-  for (int base = 0; base < n; base += kStreamChunk) {
-    const int m = std::min(kStreamChunk, n - base);
+  RTCRayHit* records = embree_records(rays.records_);
+  if (n == 1) rtcIntersect1(impl_->top, &context, records);  // the stream set-up buys nothing for one ray
+  else rtcIntersect1M(impl_->top, &context, records, unsigned(n), sizeof(RTCRayHit));
+}
+
+void Accelerator::occluded_stream(RayStreamBuffer& rays, int n) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit* records = embree_records(rays.records_);
+  if (n == 1) rtcOccluded1(impl_->top, &context, &records->ray);
+  else rtcOccluded1M(impl_->top, &context, &records->ray, unsigned(n), sizeof(RTCRayHit));
+}
+
+// The array forms go through a buffer a chunk at a time.
+void Accelerator::intersect_stream(const RaySegment* rays, int n, RayHit* hits, bool* found) const {
+  RayStreamBuffer buffer;
+  for (int base = 0; base < n; base += RayStreamBuffer::kCapacity) {
+    const int m = std::min(RayStreamBuffer::kCapacity, n - base);
+    for (int i = 0; i < m; ++i) buffer.set(i, rays[base + i]);
+    intersect_stream(buffer, m);
     for (int i = 0; i < m; ++i) {
-      const RaySegment& r = rays[base + i];
-      set_ray(r.origin, r.dir, r.tmin, r.tmax, 0xFFFFFFFFu, &rh[i].ray);
-      clear_hit(&rh[i]);
+      found[base + i] = buffer.found(i);
+      if (found[base + i]) hits[base + i] = buffer.hit(i);
     }
-    rtcIntersect1M(impl_->top, &context, rh, unsigned(m), sizeof(RTCRayHit));
-    for (int i = 0; i < m; ++i) found[base + i] = read_hit(rh[i], &hits[base + i]);
   }
 }
 
 void Accelerator::occluded_stream(const RaySegment* rays, int n, bool* occluded) const {
-  if (n == 1) {
-    occluded[0] = this->occluded(rays[0].origin, rays[0].dir, rays[0].tmin, rays[0].tmax);
-    return;
-  }
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRay ray[kStreamChunk];
-  for (int base = 0; base < n; base += kStreamChunk) {
-    const int m = std::min(kStreamChunk, n - base);
-    for (int i = 0; i < m; ++i) {
-      const RaySegment& r = rays[base + i];
-      set_ray(r.origin, r.dir, r.tmin, r.tmax, 0xFFFFFFFFu, &ray[i]);
-    }
-    rtcOccluded1M(impl_->top, &context, ray, unsigned(m), sizeof(RTCRay));
-    for (int i = 0; i < m; ++i) occluded[base + i] = read_occluded(ray[i]);
+  RayStreamBuffer buffer;
+  for (int base = 0; base < n; base += RayStreamBuffer::kCapacity) {
+    const int m = std::min(RayStreamBuffer::kCapacity, n - base);
+    for (int i = 0; i < m; ++i) buffer.set(i, rays[base + i]);
+    occluded_stream(buffer, m);
+    for (int i = 0; i < m; ++i) occluded[base + i] = buffer.occluded(i);
   }
 }
 

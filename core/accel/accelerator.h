@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 
 #include "core/math/transform.h"
@@ -28,6 +29,75 @@ struct RayHit {
   int id = -1;         // the caller's geometry id
   uint32_t prim = 0;   // triangle index within the mesh (0 for spheres)
   float u = 0, v = 0;  // Embree barycentrics: p = (1-u-v) p0 + u p1 + v p2
+};
+
+// Up to kCapacity rays in the record layout Embree's stream queries read and
+// answer in place (Embree's RTCRayHit: 80 bytes, checked field by field
+// against <embree3/rtcore_ray.h> in accelerator.cpp). A caller writes its
+// rays straight into the records and reads the answers from them: no staging
+// copy on either side of the query (the copies were 3 % of the path tracer's
+// instructions on cbox; docs/foundation.md). The fields Embree only reads
+// (time, mask, id, flags) are set once, here.
+class RayStreamBuffer {
+ public:
+  static constexpr int kCapacity = 64;
+
+  RayStreamBuffer() {
+    for (Record& r : records_) {
+      r.time = 0;
+      r.mask = 0xFFFFFFFFu;
+      r.id = 0;
+      r.flags = 0;
+    }
+  }
+  RayStreamBuffer(const RayStreamBuffer&) = delete;
+  RayStreamBuffer& operator=(const RayStreamBuffer&) = delete;
+
+  // Ray i of the next query, t in (tmin, tmax).
+  void set(int i, const Vec3f& origin, const Vec3f& dir, float tmin, float tmax) {
+    Record& r = records_[i];
+    r.org_x = origin.x;
+    r.org_y = origin.y;
+    r.org_z = origin.z;
+    r.tnear = tmin;
+    r.dir_x = dir.x;
+    r.dir_y = dir.y;
+    r.dir_z = dir.z;
+    r.tfar = tmax;
+    r.geom_id = kInvalidId;
+    r.inst_id = kInvalidId;
+  }
+  void set(int i, const RaySegment& ray) { set(i, ray.origin, ray.dir, ray.tmin, ray.tmax); }
+
+  // After Accelerator::intersect_stream: whether ray i hit, and what.
+  bool found(int i) const { return records_[i].geom_id != kInvalidId; }
+  RayHit hit(int i) const {
+    const Record& r = records_[i];
+    RayHit h;
+    h.t = r.tfar;
+    h.id = int(r.inst_id != kInvalidId ? r.inst_id : r.geom_id);
+    h.prim = r.prim_id;
+    h.u = r.u;
+    h.v = r.v;
+    return h;
+  }
+  // After Accelerator::occluded_stream (Embree sets tfar to -inf on a hit).
+  bool occluded(int i) const { return records_[i].tfar == -std::numeric_limits<float>::infinity(); }
+
+  // The layout (RTCRayHit's); only the accelerator reads records whole.
+  static constexpr uint32_t kInvalidId = 0xFFFFFFFFu;  // RTC_INVALID_GEOMETRY_ID
+  struct alignas(16) Record {
+    float org_x, org_y, org_z, tnear;
+    float dir_x, dir_y, dir_z, time;
+    float tfar;
+    uint32_t mask, id, flags;
+    float ng_x, ng_y, ng_z, u, v;
+    uint32_t prim_id, geom_id, inst_id;
+  };
+
+ private:
+  friend class Accelerator;
+  Record records_[kCapacity];
 };
 
 class Accelerator {
@@ -63,6 +133,10 @@ class Accelerator {
   // no instanced_only form).
   void intersect_stream(const RaySegment* rays, int n, RayHit* hits, bool* found) const;
   void occluded_stream(const RaySegment* rays, int n, bool* occluded) const;
+  // The same for the first n (<= RayStreamBuffer::kCapacity) rays of `rays`,
+  // answered in place (RayStreamBuffer::found/hit, ::occluded).
+  void intersect_stream(RayStreamBuffer& rays, int n) const;
+  void occluded_stream(RayStreamBuffer& rays, int n) const;
 
  private:
   struct Impl;

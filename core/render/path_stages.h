@@ -235,24 +235,25 @@ inline void log_stream(const PathState* paths, const int* which, int n, bool sha
   }
 }
 
-// Room for one stream query's rays and answers; made once per batch, not
-// per cast (its arrays would be default-initialised at every cast).
-struct RayStream {
-  RaySegment rays[kPathBatch];
-  RayHit hits[kPathBatch];
-  bool answers[kPathBatch];
-};
+// Room for one stream query's rays and answers, in Embree's own records
+// (RayStreamBuffer): the paths' rays go in, and the hits are read out, without
+// a staging copy. Made once per batch, not per cast.
+using RayStream = RayStreamBuffer;
+static_assert(RayStream::kCapacity >= kPathBatch);
 
 inline void cast_closest_stream(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths,
                                 const int* which, int n, RayStream& stream, PathCounters& counters) {
   log_stream(paths, which, n, false, counters);
-  for (int k = 0; k < n; ++k) stream.rays[k] = segment_of(paths[which[k]].ray);
-  scene.accelerator().intersect_stream(stream.rays, n, stream.hits, stream.answers);
+  for (int k = 0; k < n; ++k) {
+    const Ray& r = paths[which[k]].ray;
+    stream.set(k, r.o, r.d, r.tmin, r.tmax);
+  }
+  scene.accelerator().intersect_stream(stream, n);
   const int last_depth = last_vertex_depth(settings);
   for (int k = 0; k < n; ++k) {
     PathState& st = paths[which[k]];
-    st.hit = stream.answers[k];
-    if (st.hit) take_hit(scene, last_depth, stream.hits[k], &st);
+    st.hit = stream.found(k);
+    if (st.hit) take_hit(scene, last_depth, stream.hit(k), &st);
   }
 }
 
@@ -260,9 +261,12 @@ inline void cast_closest_stream(const FrameScene& scene, const PathTracerSetting
 inline void cast_shadow_stream_and_resolve(const FrameScene& scene, PathState* paths, const int* which, int n,
                                            RayStream& stream, PathCounters& counters) {
   log_stream(paths, which, n, true, counters);
-  for (int k = 0; k < n; ++k) stream.rays[k] = segment_of(paths[which[k]].shadow);
-  scene.accelerator().occluded_stream(stream.rays, n, stream.answers);
-  for (int k = 0; k < n; ++k) resolve_shadow(stream.answers[k], &paths[which[k]]);
+  for (int k = 0; k < n; ++k) {
+    const Ray& r = paths[which[k]].shadow;
+    stream.set(k, r.o, r.d, r.tmin, r.tmax);
+  }
+  scene.accelerator().occluded_stream(stream, n);
+  for (int k = 0; k < n; ++k) resolve_shadow(stream.occluded(k), &paths[which[k]]);
 }
 
 }  // namespace gdvr

@@ -132,19 +132,21 @@ double replay_streams(const Accelerator& accel, const std::vector<RecordedRay>& 
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size(), 64), [&](const tbb::blocked_range<size_t>& br) {
       uint64_t local = 0;
-      RaySegment segments[kPathBatch];
-      RayHit found_hits[kPathBatch];
-      bool answers[kPathBatch];
+      RayStreamBuffer buffer;  // as the path tracer casts them (path_stages.h)
       for (size_t g = br.begin(); g != br.end(); ++g) {
         const auto [begin, end] = groups[g];
         const int n = int(end - begin);
         for (int k = 0; k < n; ++k) {
           const Ray& r = rays[begin + size_t(k)].ray;
-          segments[k] = segment_of(r);
+          buffer.set(k, r.o, r.d, r.tmin, r.tmax);
         }
-        if (rays[begin].shadow) accel.occluded_stream(segments, n, answers);
-        else accel.intersect_stream(segments, n, found_hits, answers);
-        for (int k = 0; k < n; ++k) local += answers[k];
+        if (rays[begin].shadow) {
+          accel.occluded_stream(buffer, n);
+          for (int k = 0; k < n; ++k) local += buffer.occluded(k);
+        } else {
+          accel.intersect_stream(buffer, n);
+          for (int k = 0; k < n; ++k) local += buffer.found(k);
+        }
       }
       hits += local;
     });

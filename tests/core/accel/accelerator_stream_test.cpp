@@ -119,5 +119,40 @@ TEST(AcceleratorStreamTest, OcclusionMatchesSingleRayQueries) {
   EXPECT_GT(clear, 100);
 }
 
+// One RayStreamBuffer serves query after query, as a path batch's does: the
+// answers of each query (closest hits, then occlusion, then closest hits
+// again, of different rays and counts) are those of single-ray queries, so
+// nothing a query wrote into the records leaks into the next one.
+TEST(AcceleratorStreamTest, ReusedBufferAnswersEachQueryAfresh) {
+  std::vector<int> spheres;
+  auto accel = make_scene(&spheres);
+  RayStreamBuffer buffer;
+  int hits = 0, blocked = 0;
+  for (int round = 0; round < 6; ++round) {
+    const int n = round % 2 == 0 ? 64 : 23 + round;
+    const std::vector<RaySegment> rays = random_rays(n, 77u + uint32_t(round));
+    for (int i = 0; i < n; ++i) buffer.set(i, rays[size_t(i)]);
+    const bool shadow = round % 3 == 1;
+    if (shadow) accel->occluded_stream(buffer, n);
+    else accel->intersect_stream(buffer, n);
+    for (int i = 0; i < n; ++i) {
+      const RaySegment& r = rays[size_t(i)];
+      if (shadow) {
+        ASSERT_EQ(buffer.occluded(i), accel->occluded(r.origin, r.dir, r.tmin, r.tmax)) << round << " " << i;
+        blocked += buffer.occluded(i);
+        continue;
+      }
+      RayHit single;
+      ASSERT_EQ(buffer.found(i), accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &single)) << round << " " << i;
+      if (!buffer.found(i)) continue;
+      ++hits;
+      EXPECT_EQ(buffer.hit(i).id, single.id) << round << " " << i;
+      EXPECT_EQ(buffer.hit(i).prim, single.prim) << round << " " << i;
+    }
+  }
+  EXPECT_GT(hits, 50);
+  EXPECT_GT(blocked, 10);
+}
+
 }  // namespace
 }  // namespace gdvr
