@@ -278,28 +278,4 @@ void Accelerator::occluded_stream(RayStreamBuffer& rays, int n) const {
   else rtcOccluded1M(impl_->top, &context, &records->ray, unsigned(n), sizeof(RTCRayHit));
 }
 
-// The array forms go through a buffer a chunk at a time.
-void Accelerator::intersect_stream(const RaySegment* rays, int n, RayHit* hits, bool* found) const {
-  RayStreamBuffer buffer;
-  for (int base = 0; base < n; base += RayStreamBuffer::kCapacity) {
-    const int m = std::min(RayStreamBuffer::kCapacity, n - base);
-    for (int i = 0; i < m; ++i) buffer.set(i, rays[base + i]);
-    intersect_stream(buffer, m);
-    for (int i = 0; i < m; ++i) {
-      found[base + i] = buffer.found(i);
-      if (found[base + i]) hits[base + i] = buffer.hit(i);
-    }
-  }
-}
-
-void Accelerator::occluded_stream(const RaySegment* rays, int n, bool* occluded) const {
-  RayStreamBuffer buffer;
-  for (int base = 0; base < n; base += RayStreamBuffer::kCapacity) {
-    const int m = std::min(RayStreamBuffer::kCapacity, n - base);
-    for (int i = 0; i < m; ++i) buffer.set(i, rays[base + i]);
-    occluded_stream(buffer, m);
-    for (int i = 0; i < m; ++i) occluded[base + i] = buffer.occluded(i);
-  }
-}
-
 }  // namespace gdvr

@@ -18,12 +18,6 @@
 
 namespace gdvr {
 
-// A ray and its interval, as the stream queries take it.
-struct RaySegment {
-  Vec3f origin, dir;
-  float tmin = 0, tmax = 0;
-};
-
 struct RayHit {
   float t = 0;
   int id = -1;         // the caller's geometry id
@@ -35,8 +29,8 @@ struct RayHit {
 // answer in place (Embree's RTCRayHit: 80 bytes, checked field by field
 // against <embree3/rtcore_ray.h> in accelerator.cpp). A caller writes its
 // rays straight into the records and reads the answers from them: no staging
-// copy on either side of the query (the copies were 3 % of the path tracer's
-// instructions on cbox; docs/foundation.md). The fields Embree only reads
+// copy on either side of the query (leaving out the copies cut 2.2 % of the
+// path tracer's instructions on cbox; docs/foundation.md). The fields Embree only reads
 // (time, mask, id, flags) are set once, here.
 class RayStreamBuffer {
  public:
@@ -67,7 +61,6 @@ class RayStreamBuffer {
     r.geom_id = kInvalidId;
     r.inst_id = kInvalidId;
   }
-  void set(int i, const RaySegment& ray) { set(i, ray.origin, ray.dir, ray.tmin, ray.tmax); }
 
   // After Accelerator::intersect_stream: whether ray i hit, and what.
   bool found(int i) const { return records_[i].geom_id != kInvalidId; }
@@ -122,19 +115,16 @@ class Accelerator {
   // added with instanced = true (Embree ray masks).
   bool occluded(Vec3f origin, Vec3f dir, float tmin, float tmax, bool instanced_only = false) const;
 
-  // The same queries for rays[0..n) at once, through Embree's stream
-  // interface (rtcIntersect1M / rtcOccluded1M): Embree traces the stream in
-  // SIMD packets, switching to single-ray traversal where the packet's rays
-  // part, which on the bundled scenes is 5-40 % faster per ray than n single
-  // queries (docs/foundation.md). found[i] and occluded[i] are what
-  // intersect() and occluded() return for rays[i]; hits agree with theirs
-  // (triangles bit for bit; a sphere's t to within an ulp or two, as its
-  // packet kernel rounds differently). Streams test all geometry (there is
-  // no instanced_only form).
-  void intersect_stream(const RaySegment* rays, int n, RayHit* hits, bool* found) const;
-  void occluded_stream(const RaySegment* rays, int n, bool* occluded) const;
-  // The same for the first n (<= RayStreamBuffer::kCapacity) rays of `rays`,
-  // answered in place (RayStreamBuffer::found/hit, ::occluded).
+  // The same queries for the first n (<= RayStreamBuffer::kCapacity) rays of
+  // `rays` at once, answered in place (RayStreamBuffer::found/hit,
+  // ::occluded), through Embree's stream interface (rtcIntersect1M /
+  // rtcOccluded1M): Embree traces the stream in SIMD packets, switching to
+  // single-ray traversal where the packet's rays part, which on the bundled
+  // scenes is 5-40 % faster per ray than n single queries
+  // (docs/foundation.md). The answers are those of intersect() and
+  // occluded() (triangles bit for bit; a sphere's t to within an ulp or two,
+  // as its packet kernel rounds differently). Streams test all geometry
+  // (there is no instanced_only form).
   void intersect_stream(RayStreamBuffer& rays, int n) const;
   void occluded_stream(RayStreamBuffer& rays, int n) const;
 

@@ -17,19 +17,17 @@ void CameraHitCache::begin(const Tile& tile, Vec2f jitter, PathCounters& counter
   // The tile's own pixels, which every base path asks for, as streams of a
   // row at a time (Accelerator::intersect_stream: the same hits as single
   // casts, and camera rays are coherent).
-  constexpr int kChunk = 64;
-  RaySegment rays[kChunk];
-  RayHit hits[kChunk];
-  bool found[kChunk];
+  constexpr int kChunk = RayStreamBuffer::kCapacity;
+  RayStreamBuffer rays;  // written and answered in place
   size_t entry[kChunk];  // index into hits_
   int m = 0;
   auto flush = [&] {
-    scene_.accelerator().intersect_stream(rays, m, hits, found);
+    scene_.accelerator().intersect_stream(rays, m);
     counters.rays += uint64_t(m);
     for (int k = 0; k < m; ++k) {
       CameraHit& h = hits_[entry[k]];
-      h.hit = found[k];
-      if (found[k]) scene_.interaction(h.ray, hits[k], &h.si);
+      h.hit = rays.found(k);
+      if (h.hit) scene_.interaction(h.ray, rays.hit(k), &h.si);
       traced_[entry[k]] = 1;
     }
     m = 0;
@@ -39,7 +37,7 @@ void CameraHitCache::begin(const Tile& tile, Vec2f jitter, PathCounters& counter
       entry[m] = size_t(y - y0_) * size_t(width_) + size_t(x - x0_);
       CameraHit& h = hits_[entry[m]];
       h.ray = camera_.generate_ray({float(x) + jitter_.x, float(y) + jitter_.y});
-      rays[m] = segment_of(h.ray);
+      rays.set(m, h.ray.o, h.ray.d, h.ray.tmin, h.ray.tmax);
       if (++m == kChunk) flush();
     }
   if (m > 0) flush();

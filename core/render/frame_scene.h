@@ -34,9 +34,6 @@ inline Ray shadow_ray(const SurfaceInteraction& si, const EmitterSample& es) {
   return shadow;
 }
 
-// A ray as the accelerator's stream queries take it.
-inline RaySegment segment_of(const Ray& r) { return {r.o, r.d, r.tmin, r.tmax}; }
-
 class FrameScene {
  public:
   // `animated_shapes[i]` marks shapes whose transform changes during the job

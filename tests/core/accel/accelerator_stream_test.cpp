@@ -1,6 +1,7 @@
-// Accelerator's stream queries (intersect_stream, occluded_stream) against
-// its single-ray queries on the same rays: the path tracer's batches cast
-// streams and trace_path single rays, and both must see the same scene.
+// Accelerator's stream queries (intersect_stream, occluded_stream on a
+// RayStreamBuffer) against its single-ray queries on the same rays: the path
+// tracer's batches cast streams and trace_path single rays, and both must see
+// the same scene.
 #include "core/accel/accelerator.h"
 
 #include <gtest/gtest.h>
@@ -43,11 +44,16 @@ std::unique_ptr<Accelerator> make_scene(std::vector<int>* sphere_ids) {
   return a;
 }
 
-std::vector<RaySegment> random_rays(int n, uint32_t seed) {
+struct TestRay {
+  Vec3f origin, dir;
+  float tmin = 0, tmax = 0;
+};
+
+std::vector<TestRay> random_rays(int n, uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> pos(-3.0f, 3.0f), aim(-2.0f, 2.0f), len(0.5f, 6.0f);
-  std::vector<RaySegment> rays(static_cast<size_t>(n));
-  for (RaySegment& r : rays) {
+  std::vector<TestRay> rays(static_cast<size_t>(n));
+  for (TestRay& r : rays) {
     r.origin = Vec3f(pos(rng), pos(rng), pos(rng));
     // Towards a point of the scene's box: most rays meet something.
     r.dir = normalize(Vec3f(aim(rng), aim(rng), aim(rng)) - r.origin);
@@ -55,6 +61,42 @@ std::vector<RaySegment> random_rays(int n, uint32_t seed) {
     r.tmax = (rng() % 3 == 0) ? std::numeric_limits<float>::infinity() : len(rng);
   }
   return rays;
+}
+
+// rays[0..n) as stream queries of up to RayStreamBuffer::kCapacity rays, one
+// buffer reused for all of them (as a path batch reuses its own).
+void intersect_in_streams(const Accelerator& accel, const std::vector<TestRay>& rays, std::vector<RayHit>* hits,
+                          std::vector<char>* found) {
+  RayStreamBuffer buffer;
+  hits->assign(rays.size(), RayHit{});
+  found->assign(rays.size(), 0);
+  for (size_t base = 0; base < rays.size(); base += RayStreamBuffer::kCapacity) {
+    const int m = int(std::min(rays.size() - base, size_t(RayStreamBuffer::kCapacity)));
+    for (int i = 0; i < m; ++i) {
+      const TestRay& r = rays[base + size_t(i)];
+      buffer.set(i, r.origin, r.dir, r.tmin, r.tmax);
+    }
+    accel.intersect_stream(buffer, m);
+    for (int i = 0; i < m; ++i) {
+      (*found)[base + size_t(i)] = buffer.found(i);
+      if (buffer.found(i)) (*hits)[base + size_t(i)] = buffer.hit(i);
+    }
+  }
+}
+
+std::vector<char> occluded_in_streams(const Accelerator& accel, const std::vector<TestRay>& rays) {
+  RayStreamBuffer buffer;
+  std::vector<char> occluded(rays.size(), 0);
+  for (size_t base = 0; base < rays.size(); base += RayStreamBuffer::kCapacity) {
+    const int m = int(std::min(rays.size() - base, size_t(RayStreamBuffer::kCapacity)));
+    for (int i = 0; i < m; ++i) {
+      const TestRay& r = rays[base + size_t(i)];
+      buffer.set(i, r.origin, r.dir, r.tmin, r.tmax);
+    }
+    accel.occluded_stream(buffer, m);
+    for (int i = 0; i < m; ++i) occluded[base + size_t(i)] = buffer.occluded(i);
+  }
+  return occluded;
 }
 
 bool is_sphere(const std::vector<int>& sphere_ids, int id) {
@@ -65,17 +107,17 @@ TEST(AcceleratorStreamTest, ClosestHitsMatchSingleRayQueries) {
   std::vector<int> spheres;
   auto accel = make_scene(&spheres);
   int hits = 0, misses = 0, sphere_hits = 0;
-  // 1 (the single-query shortcut), small, one full chunk, and more than one chunk.
+  // 1 (the single-query shortcut), small, one full stream, and more than one.
   for (int n : {1, 2, 17, 64, 150, 1000}) {
-    const std::vector<RaySegment> rays = random_rays(n, uint32_t(n));
-    std::vector<RayHit> stream_hits(static_cast<size_t>(n));
-    std::unique_ptr<bool[]> found(new bool[static_cast<size_t>(n)]);
-    accel->intersect_stream(rays.data(), n, stream_hits.data(), found.get());
+    const std::vector<TestRay> rays = random_rays(n, uint32_t(n));
+    std::vector<RayHit> stream_hits;
+    std::vector<char> found;
+    intersect_in_streams(*accel, rays, &stream_hits, &found);
     for (int i = 0; i < n; ++i) {
-      const RaySegment& r = rays[size_t(i)];
+      const TestRay& r = rays[size_t(i)];
       RayHit single;
       const bool single_found = accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &single);
-      ASSERT_EQ(found[size_t(i)], single_found) << "n " << n << " ray " << i;
+      ASSERT_EQ(bool(found[size_t(i)]), single_found) << "n " << n << " ray " << i;
       if (!single_found) {
         ++misses;
         continue;
@@ -106,12 +148,11 @@ TEST(AcceleratorStreamTest, OcclusionMatchesSingleRayQueries) {
   auto accel = make_scene(&spheres);
   int blocked = 0, clear = 0;
   for (int n : {1, 3, 64, 65, 1000}) {
-    const std::vector<RaySegment> rays = random_rays(n, 1000u + uint32_t(n));
-    std::unique_ptr<bool[]> occluded(new bool[static_cast<size_t>(n)]);
-    accel->occluded_stream(rays.data(), n, occluded.get());
+    const std::vector<TestRay> rays = random_rays(n, 1000u + uint32_t(n));
+    const std::vector<char> occluded = occluded_in_streams(*accel, rays);
     for (int i = 0; i < n; ++i) {
-      const RaySegment& r = rays[size_t(i)];
-      ASSERT_EQ(occluded[size_t(i)], accel->occluded(r.origin, r.dir, r.tmin, r.tmax)) << "n " << n << " ray " << i;
+      const TestRay& r = rays[size_t(i)];
+      ASSERT_EQ(bool(occluded[size_t(i)]), accel->occluded(r.origin, r.dir, r.tmin, r.tmax)) << "n " << n << " ray " << i;
       (occluded[size_t(i)] ? blocked : clear)++;
     }
   }
@@ -130,13 +171,14 @@ TEST(AcceleratorStreamTest, ReusedBufferAnswersEachQueryAfresh) {
   int hits = 0, blocked = 0;
   for (int round = 0; round < 6; ++round) {
     const int n = round % 2 == 0 ? 64 : 23 + round;
-    const std::vector<RaySegment> rays = random_rays(n, 77u + uint32_t(round));
-    for (int i = 0; i < n; ++i) buffer.set(i, rays[size_t(i)]);
+    const std::vector<TestRay> rays = random_rays(n, 77u + uint32_t(round));
+    for (int i = 0; i < n; ++i) buffer.set(i, rays[size_t(i)].origin, rays[size_t(i)].dir, rays[size_t(i)].tmin,
+                                           rays[size_t(i)].tmax);
     const bool shadow = round % 3 == 1;
     if (shadow) accel->occluded_stream(buffer, n);
     else accel->intersect_stream(buffer, n);
     for (int i = 0; i < n; ++i) {
-      const RaySegment& r = rays[size_t(i)];
+      const TestRay& r = rays[size_t(i)];
       if (shadow) {
         ASSERT_EQ(buffer.occluded(i), accel->occluded(r.origin, r.dir, r.tmin, r.tmax)) << round << " " << i;
         blocked += buffer.occluded(i);

@@ -118,20 +118,18 @@ TEST(PathBatchSphereTest, SphereHitsAreTheSameFromStreamsAndSingleCasts) {
   int sphere_hits = 0;
   for (size_t base = 0; base < rays.size(); base += kPathBatch) {
     const int n = int(std::min(rays.size() - base, size_t(kPathBatch)));
-    RaySegment segments[kPathBatch];
-    RayHit hits[kPathBatch];
-    bool found[kPathBatch];
+    RayStream stream;
     for (int k = 0; k < n; ++k) {
       const Ray& r = rays[base + size_t(k)];
-      segments[k] = segment_of(r);
+      stream.set(k, r.o, r.d, r.tmin, r.tmax);
     }
-    scene.accelerator().intersect_stream(segments, n, hits, found);
+    scene.accelerator().intersect_stream(stream, n);
     for (int k = 0; k < n; ++k) {
       const Ray& r = rays[base + size_t(k)];
       SurfaceInteraction single, streamed;
-      ASSERT_EQ(scene.intersect(r, &single), found[k]);
-      if (!found[k]) continue;
-      scene.interaction(r, hits[k], &streamed);
+      ASSERT_EQ(scene.intersect(r, &single), stream.found(k));
+      if (!stream.found(k)) continue;
+      scene.interaction(r, stream.hit(k), &streamed);
       ASSERT_EQ(single.shape, streamed.shape);
       if (ts->desc.shapes[size_t(single.shape)].type != ShapeType::kSphere) continue;
       ++sphere_hits;
