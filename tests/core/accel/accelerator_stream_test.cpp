@@ -63,6 +63,16 @@ std::vector<TestRay> random_rays(int n, uint32_t seed) {
   return rays;
 }
 
+// Writes rays[base..) into `buffer`, as many as it takes; returns how many.
+int fill_stream(const std::vector<TestRay>& rays, size_t base, RayStreamBuffer* buffer) {
+  const int m = int(std::min(rays.size() - base, size_t(RayStreamBuffer::kCapacity)));
+  for (int i = 0; i < m; ++i) {
+    const TestRay& r = rays[base + size_t(i)];
+    buffer->set(i, r.origin, r.dir, r.tmin, r.tmax);
+  }
+  return m;
+}
+
 // rays[0..n) as stream queries of up to RayStreamBuffer::kCapacity rays, one
 // buffer reused for all of them (as a path batch reuses its own).
 void intersect_in_streams(const Accelerator& accel, const std::vector<TestRay>& rays, std::vector<RayHit>* hits,
@@ -71,11 +81,7 @@ void intersect_in_streams(const Accelerator& accel, const std::vector<TestRay>& 
   hits->assign(rays.size(), RayHit{});
   found->assign(rays.size(), 0);
   for (size_t base = 0; base < rays.size(); base += RayStreamBuffer::kCapacity) {
-    const int m = int(std::min(rays.size() - base, size_t(RayStreamBuffer::kCapacity)));
-    for (int i = 0; i < m; ++i) {
-      const TestRay& r = rays[base + size_t(i)];
-      buffer.set(i, r.origin, r.dir, r.tmin, r.tmax);
-    }
+    const int m = fill_stream(rays, base, &buffer);
     accel.intersect_stream(buffer, m);
     for (int i = 0; i < m; ++i) {
       (*found)[base + size_t(i)] = buffer.found(i);
@@ -88,11 +94,7 @@ std::vector<char> occluded_in_streams(const Accelerator& accel, const std::vecto
   RayStreamBuffer buffer;
   std::vector<char> occluded(rays.size(), 0);
   for (size_t base = 0; base < rays.size(); base += RayStreamBuffer::kCapacity) {
-    const int m = int(std::min(rays.size() - base, size_t(RayStreamBuffer::kCapacity)));
-    for (int i = 0; i < m; ++i) {
-      const TestRay& r = rays[base + size_t(i)];
-      buffer.set(i, r.origin, r.dir, r.tmin, r.tmax);
-    }
+    const int m = fill_stream(rays, base, &buffer);
     accel.occluded_stream(buffer, m);
     for (int i = 0; i < m; ++i) occluded[base + size_t(i)] = buffer.occluded(i);
   }
@@ -172,8 +174,7 @@ TEST(AcceleratorStreamTest, ReusedBufferAnswersEachQueryAfresh) {
   for (int round = 0; round < 6; ++round) {
     const int n = round % 2 == 0 ? 64 : 23 + round;
     const std::vector<TestRay> rays = random_rays(n, 77u + uint32_t(round));
-    for (int i = 0; i < n; ++i) buffer.set(i, rays[size_t(i)].origin, rays[size_t(i)].dir, rays[size_t(i)].tmin,
-                                           rays[size_t(i)].tmax);
+    ASSERT_EQ(fill_stream(rays, 0, &buffer), n);
     const bool shadow = round % 3 == 1;
     if (shadow) accel->occluded_stream(buffer, n);
     else accel->intersect_stream(buffer, n);
