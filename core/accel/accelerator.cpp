@@ -263,6 +263,7 @@ bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax, bool instan
 }
 
 void Accelerator::intersect_stream(RayStreamBuffer& rays, int n) const {
+  if (n <= 0) return;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);  // incoherent: the coherent flag's sorting was 2x slower here
   RTCRayHit* records = embree_records(rays.records_);
@@ -271,6 +272,7 @@ void Accelerator::intersect_stream(RayStreamBuffer& rays, int n) const {
 }
 
 void Accelerator::occluded_stream(RayStreamBuffer& rays, int n) const {
+  if (n <= 0) return;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit* records = embree_records(rays.records_);

@@ -30,8 +30,8 @@ struct RayHit {
 // against <embree3/rtcore_ray.h> in accelerator.cpp). A caller writes its
 // rays straight into the records and reads the answers from them: no staging
 // copy on either side of the query (leaving out the copies cut 2.2 % of the
-// path tracer's instructions on cbox; docs/foundation.md). The fields Embree only reads
-// (time, mask, id, flags) are set once, here.
+// path tracer's instructions on cbox; docs/foundation.md). The fields Embree
+// only reads (time, mask, id, flags) are set once, here.
 class RayStreamBuffer {
  public:
   static constexpr int kCapacity = 64;

@@ -37,7 +37,7 @@ void CameraHitCache::begin(const Tile& tile, Vec2f jitter, PathCounters& counter
       entry[m] = size_t(y - y0_) * size_t(width_) + size_t(x - x0_);
       CameraHit& h = hits_[entry[m]];
       h.ray = camera_.generate_ray({float(x) + jitter_.x, float(y) + jitter_.y});
-      rays.set(m, h.ray.o, h.ray.d, h.ray.tmin, h.ray.tmax);
+      set_stream_ray(rays, m, h.ray);
       if (++m == kChunk) flush();
     }
   if (m > 0) flush();

@@ -34,6 +34,9 @@ inline Ray shadow_ray(const SurfaceInteraction& si, const EmitterSample& es) {
   return shadow;
 }
 
+// Ray i of the accelerator's next stream query.
+inline void set_stream_ray(RayStreamBuffer& stream, int i, const Ray& r) { stream.set(i, r.o, r.d, r.tmin, r.tmax); }
+
 class FrameScene {
  public:
   // `animated_shapes[i]` marks shapes whose transform changes during the job

@@ -77,15 +77,9 @@ inline void prefetch_for_next_vertex(const FrameScene& scene, const PathState& s
   scene.prefetch_next_emitter_sample(st.sampler);
 }
 
-// Whether the vertex that st.ray finds is the path's last (max_depth): there
-// only emission seen along the ray counts, nothing is sampled.
-inline bool finds_last_vertex(const PathTracerSettings& settings, const PathState& st) {
-  return settings.max_depth >= 0 && st.depth + 1 >= settings.max_depth;
-}
-
-// The depth of a path's last vertex under max_depth (INT_MAX: unbounded);
-// finds_last_vertex(settings, st) is st.depth >= last_vertex_depth(settings).
-// A stream query computes it once for all its hits.
+// The depth of a path's last vertex under max_depth (INT_MAX: unbounded).
+// There only emission seen along the ray counts; nothing is sampled. A stream
+// query computes it once for all its hits.
 inline int last_vertex_depth(const PathTracerSettings& settings) {
   return settings.max_depth >= 0 ? settings.max_depth - 1 : std::numeric_limits<int>::max();
 }
@@ -126,7 +120,7 @@ inline void add_emission(const FrameScene& scene, const PathTracerSettings& sett
       if (st->depth == 0) st->direct += contrib;
     }
   }
-  st->continues = st->hit && !finds_last_vertex(settings, *st);
+  st->continues = st->hit && st->depth < last_vertex_depth(settings);
   if (st->continues) {
     const Scene& desc = scene.scene();
     st->bsdf = &desc.bsdfs[size_t(desc.shapes[size_t(si.shape)].bsdf)];
@@ -244,10 +238,7 @@ static_assert(RayStream::kCapacity >= kPathBatch);
 inline void cast_closest_stream(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths,
                                 const int* which, int n, RayStream& stream, PathCounters& counters) {
   log_stream(paths, which, n, false, counters);
-  for (int k = 0; k < n; ++k) {
-    const Ray& r = paths[which[k]].ray;
-    stream.set(k, r.o, r.d, r.tmin, r.tmax);
-  }
+  for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].ray);
   scene.accelerator().intersect_stream(stream, n);
   const int last_depth = last_vertex_depth(settings);
   for (int k = 0; k < n; ++k) {
@@ -261,10 +252,7 @@ inline void cast_closest_stream(const FrameScene& scene, const PathTracerSetting
 inline void cast_shadow_stream_and_resolve(const FrameScene& scene, PathState* paths, const int* which, int n,
                                            RayStream& stream, PathCounters& counters) {
   log_stream(paths, which, n, true, counters);
-  for (int k = 0; k < n; ++k) {
-    const Ray& r = paths[which[k]].shadow;
-    stream.set(k, r.o, r.d, r.tmin, r.tmax);
-  }
+  for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].shadow);
   scene.accelerator().occluded_stream(stream, n);
   for (int k = 0; k < n; ++k) resolve_shadow(stream.occluded(k), &paths[which[k]]);
 }

@@ -136,10 +136,7 @@ double replay_streams(const Accelerator& accel, const std::vector<RecordedRay>& 
       for (size_t g = br.begin(); g != br.end(); ++g) {
         const auto [begin, end] = groups[g];
         const int n = int(end - begin);
-        for (int k = 0; k < n; ++k) {
-          const Ray& r = rays[begin + size_t(k)].ray;
-          buffer.set(k, r.o, r.d, r.tmin, r.tmax);
-        }
+        for (int k = 0; k < n; ++k) set_stream_ray(buffer, k, rays[begin + size_t(k)].ray);
         if (rays[begin].shadow) {
           accel.occluded_stream(buffer, n);
           for (int k = 0; k < n; ++k) local += buffer.occluded(k);

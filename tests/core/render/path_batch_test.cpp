@@ -119,10 +119,7 @@ TEST(PathBatchSphereTest, SphereHitsAreTheSameFromStreamsAndSingleCasts) {
   for (size_t base = 0; base < rays.size(); base += kPathBatch) {
     const int n = int(std::min(rays.size() - base, size_t(kPathBatch)));
     RayStream stream;
-    for (int k = 0; k < n; ++k) {
-      const Ray& r = rays[base + size_t(k)];
-      stream.set(k, r.o, r.d, r.tmin, r.tmax);
-    }
+    for (int k = 0; k < n; ++k) set_stream_ray(stream, k, rays[base + size_t(k)]);
     scene.accelerator().intersect_stream(stream, n);
     for (int k = 0; k < n; ++k) {
       const Ray& r = rays[base + size_t(k)];
