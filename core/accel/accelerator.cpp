@@ -58,14 +58,18 @@ struct Accelerator::Impl {
   ErrorSink errors;
   RTCDevice device = nullptr;
   RTCScene top = nullptr;
+  RTCScene emitters = nullptr;            // the emitting geometry of `top` again, under the same ids
   std::map<int, RTCGeometry> instances;   // id -> instance geometry (owned by `top`)
   std::vector<RTCScene> child_scenes;     // released in the destructor
 
   ~Impl() {
     for (RTCScene s : child_scenes) rtcReleaseScene(s);
     if (top) rtcReleaseScene(top);
+    if (emitters) rtcReleaseScene(emitters);
     if (device) rtcReleaseDevice(device);
   }
+
+  RTCScene scene(GeometrySet set) const { return set == GeometrySet::kEmitters ? emitters : top; }
 
   Status take_error(const std::string& what) {
     std::lock_guard<std::mutex> lock(errors.mutex);
@@ -77,12 +81,16 @@ struct Accelerator::Impl {
 
   // Puts `geom` either in the top-level scene under `id`, or in a fresh child
   // scene placed into the top level by an instance with id `id`.
-  Status attach(int id, RTCGeometry geom, bool instanced, const Transform& to_world) {
+  // An emitting geometry (or its instance) is attached to `emitters` as well:
+  // Embree lets one geometry belong to several scenes, so an instance moved by
+  // set_instance_transform moves in both.
+  Status attach(int id, RTCGeometry geom, bool instanced, const Transform& to_world, bool emits) {
     rtcCommitGeometry(geom);
     if (!instanced) {
       rtcSetGeometryMask(geom, kStaticMask);
       rtcCommitGeometry(geom);
       rtcAttachGeometryByID(top, geom, unsigned(id));
+      if (emits) rtcAttachGeometryByID(emitters, geom, unsigned(id));
       rtcReleaseGeometry(geom);
       return take_error("attaching geometry " + std::to_string(id));
     }
@@ -99,8 +107,9 @@ struct Accelerator::Impl {
     rtcSetGeometryMask(inst, kInstancedMask);
     rtcCommitGeometry(inst);
     rtcAttachGeometryByID(top, inst, unsigned(id));
+    if (emits) rtcAttachGeometryByID(emitters, inst, unsigned(id));
     instances[id] = inst;
-    rtcReleaseGeometry(inst);  // the scene keeps its reference
+    rtcReleaseGeometry(inst);  // the scenes keep their references
     return take_error("instancing geometry " + std::to_string(id));
   }
 };
@@ -117,12 +126,14 @@ Expected<std::unique_ptr<Accelerator>> Accelerator::create() {
   rtcSetDeviceErrorFunction(impl->device, on_embree_error, &impl->errors);
   impl->top = rtcNewScene(impl->device);
   rtcSetSceneBuildQuality(impl->top, RTC_BUILD_QUALITY_HIGH);
+  impl->emitters = rtcNewScene(impl->device);
+  rtcSetSceneBuildQuality(impl->emitters, RTC_BUILD_QUALITY_HIGH);
   GDVR_RETURN_IF_ERROR(impl->take_error("creating Embree scene"));
   return std::unique_ptr<Accelerator>(new Accelerator(std::move(impl)));
 }
 
 Status Accelerator::add_mesh(int id, const Vec3f* positions, size_t vertex_count, const uint32_t* indices,
-                             size_t triangle_count, bool instanced, const Transform& to_world) {
+                             size_t triangle_count, bool instanced, const Transform& to_world, bool emits) {
   if (vertex_count == 0 || triangle_count == 0) return invalid_argument("empty mesh " + std::to_string(id));
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
   // Embree-allocated buffers are padded as Embree's SIMD loads require.
@@ -141,10 +152,11 @@ Status Accelerator::add_mesh(int id, const Vec3f* positions, size_t vertex_count
     v[3 * i + 2] = positions[i].z;
   }
   std::copy(indices, indices + 3 * triangle_count, ix);
-  return impl_->attach(id, geom, instanced, to_world);
+  return impl_->attach(id, geom, instanced, to_world, emits);
 }
 
-Status Accelerator::add_sphere(int id, Vec3f center, float radius, bool instanced, const Transform& to_world) {
+Status Accelerator::add_sphere(int id, Vec3f center, float radius, bool instanced, const Transform& to_world,
+                               bool emits) {
   if (!(radius > 0) || !std::isfinite(radius) || !is_finite(center))
     return invalid_argument("sphere " + std::to_string(id) + " has a non-positive or non-finite radius/center");
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
@@ -158,7 +170,7 @@ Status Accelerator::add_sphere(int id, Vec3f center, float radius, bool instance
   v[1] = center.y;
   v[2] = center.z;
   v[3] = radius;
-  return impl_->attach(id, geom, instanced, to_world);
+  return impl_->attach(id, geom, instanced, to_world, emits);
 }
 
 Status Accelerator::set_instance_transform(int id, const Transform& to_world) {
@@ -173,6 +185,7 @@ Status Accelerator::set_instance_transform(int id, const Transform& to_world) {
 
 Status Accelerator::commit() {
   rtcCommitScene(impl_->top);
+  rtcCommitScene(impl_->emitters);
   return impl_->take_error("building the BVH");
 }
 
@@ -243,13 +256,13 @@ RTCRayHit* embree_records(RayStreamBuffer::Record* records) { return reinterpret
 
 }  // namespace
 
-bool Accelerator::intersect(Vec3f o, Vec3f d, float tmin, float tmax, RayHit* hit) const {
+bool Accelerator::intersect(Vec3f o, Vec3f d, float tmin, float tmax, RayHit* hit, GeometrySet set) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh;
   set_ray(o, d, tmin, tmax, 0xFFFFFFFFu, &rh.ray);
   clear_hit(&rh);
-  rtcIntersect1(impl_->top, &context, &rh);
+  rtcIntersect1(impl_->scene(set), &context, &rh);
   return read_hit(rh, hit);
 }
 
@@ -262,13 +275,14 @@ bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax, bool instan
   return read_occluded(ray);
 }
 
-void Accelerator::intersect_stream(RayStreamBuffer& rays, int n) const {
+void Accelerator::intersect_stream(RayStreamBuffer& rays, int n, GeometrySet set) const {
   if (n <= 0) return;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);  // incoherent: the coherent flag's sorting was 2x slower here
   RTCRayHit* records = embree_records(rays.records_);
-  if (n == 1) rtcIntersect1(impl_->top, &context, records);  // the stream set-up buys nothing for one ray
-  else rtcIntersect1M(impl_->top, &context, records, unsigned(n), sizeof(RTCRayHit));
+  RTCScene scene = impl_->scene(set);
+  if (n == 1) rtcIntersect1(scene, &context, records);  // the stream set-up buys nothing for one ray
+  else rtcIntersect1M(scene, &context, records, unsigned(n), sizeof(RTCRayHit));
 }
 
 void Accelerator::occluded_stream(RayStreamBuffer& rays, int n) const {

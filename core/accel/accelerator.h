@@ -5,7 +5,9 @@
 // Static geometry lives directly in the top-level scene (in world space).
 // Geometry that animates is added as an instance of its own object-space scene,
 // so a frame change only updates an instance transform and refits the top
-// level instead of rebuilding every BVH.
+// level instead of rebuilding every BVH. Geometry that emits light is also
+// in a second top-level scene of emitters only, for closest-hit queries that
+// look for emission alone (GeometrySet::kEmitters).
 #pragma once
 
 #include <cstdint>
@@ -93,6 +95,11 @@ class RayStreamBuffer {
   Record records_[kCapacity];
 };
 
+// Which geometry a closest-hit query tests: all of it, or only what was added
+// with `emits` (its own BVH, so the query costs what the emitters cost: a few
+// spheres or quads in most scenes).
+enum class GeometrySet { kAll, kEmitters };
+
 class Accelerator {
  public:
   static Expected<std::unique_ptr<Accelerator>> create();
@@ -102,15 +109,17 @@ class Accelerator {
 
   // `instanced`: the mesh is in object space and placed by `to_world`, which
   // can change later with set_instance_transform. Otherwise it is in world space.
+  // `emits`: the shape is an area emitter (it is in GeometrySet::kEmitters too).
   Status add_mesh(int id, const Vec3f* positions, size_t vertex_count, const uint32_t* indices,
-                  size_t triangle_count, bool instanced, const Transform& to_world);
-  Status add_sphere(int id, Vec3f center, float radius, bool instanced, const Transform& to_world);
+                  size_t triangle_count, bool instanced, const Transform& to_world, bool emits);
+  Status add_sphere(int id, Vec3f center, float radius, bool instanced, const Transform& to_world, bool emits);
   Status set_instance_transform(int id, const Transform& to_world);
   // Builds or refits; must be called after adding geometry or moving instances.
   Status commit();
 
-  // Closest hit with t in (tmin, tmax). Thread-safe after commit().
-  bool intersect(Vec3f origin, Vec3f dir, float tmin, float tmax, RayHit* hit) const;
+  // Closest hit with t in (tmin, tmax) among `set`. Thread-safe after commit().
+  bool intersect(Vec3f origin, Vec3f dir, float tmin, float tmax, RayHit* hit,
+                 GeometrySet set = GeometrySet::kAll) const;
   // Any hit with t in (tmin, tmax); `instanced_only`: test only the geometry
   // added with instanced = true (Embree ray masks).
   bool occluded(Vec3f origin, Vec3f dir, float tmin, float tmax, bool instanced_only = false) const;
@@ -123,9 +132,9 @@ class Accelerator {
   // scenes is 5-40 % faster per ray than n single queries
   // (docs/foundation.md). The answers are those of intersect() and
   // occluded() (triangles bit for bit; a sphere's t to within an ulp or two,
-  // as its packet kernel rounds differently). Streams test all geometry
-  // (there is no instanced_only form).
-  void intersect_stream(RayStreamBuffer& rays, int n) const;
+  // as its packet kernel rounds differently). Occlusion streams test all
+  // geometry (there is no instanced_only form).
+  void intersect_stream(RayStreamBuffer& rays, int n, GeometrySet set = GeometrySet::kAll) const;
   void occluded_stream(RayStreamBuffer& rays, int n) const;
 
  private:

@@ -114,6 +114,7 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
   s.to_object = shape.to_world.inverse();
   s.handedness = determinant_sign(shape.to_world);
   const std::string name = "shape " + std::to_string(i) + (shape.id.empty() ? "" : " ('" + shape.id + "')");
+  const bool emits = shape.emitter >= 0;
   if (shape.type == ShapeType::kSphere) {
     s.center = shape.to_world.point(Vec3f(0.0f));
     float rx = length(shape.to_world.vector({1, 0, 0})), ry = length(shape.to_world.vector({0, 1, 0})),
@@ -122,8 +123,8 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
       return invalid_argument(name + ": a sphere's to_world must scale uniformly");
     s.radius = rx;
     s.area = 4.0f * kPi * s.radius * s.radius;
-    if (animated) return accel_->add_sphere(int(i), Vec3f(0.0f), 1.0f, true, shape.to_world);
-    return accel_->add_sphere(int(i), s.center, s.radius, false, Transform());
+    if (animated) return accel_->add_sphere(int(i), Vec3f(0.0f), 1.0f, true, shape.to_world, emits);
+    return accel_->add_sphere(int(i), s.center, s.radius, false, Transform(), emits);
   }
   if (!shape.mesh || shape.mesh->triangle_count() == 0) return invalid_argument(name + " has no triangles");
   if (animated) {
@@ -162,7 +163,7 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
       }
   }
   return accel_->add_mesh(int(i), m.positions.data(), m.positions.size(), m.indices.data(), m.triangle_count(),
-                          animated, shape.to_world);
+                          animated, shape.to_world, emits);
 }
 
 Status FrameScene::prepare_emitters() {

@@ -57,6 +57,10 @@ class FrameScene {
   bool intersect_hit(const Ray& ray, RayHit* hit) const {
     return accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, hit);
   }
+  // The same among the area emitters' shapes only (GeometrySet::kEmitters).
+  bool intersect_emitter_hit(const Ray& ray, RayHit* hit) const {
+    return accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, hit, GeometrySet::kEmitters);
+  }
   void interaction(const Ray& ray, const RayHit& hit, SurfaceInteraction* si) const;
   bool occluded(const Ray& ray) const { return accel_->occluded(ray.o, ray.d, ray.tmin, ray.tmax); }
   // Occluded by an animated shape (the only ones whose place can change

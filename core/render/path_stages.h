@@ -9,7 +9,8 @@
 //   [closest hit] -> add_emission -> sample_emitter -> connect_emitter
 //                 -> sample_bsdf -> [shadow ray] -> resolve_shadow
 // The emitter's contribution waits in the state until its shadow ray is
-// answered. The stages draw the path's numbers in the order
+// answered. The last ray under max_depth looks for emitters first (see
+// cast_last below). The stages draw the path's numbers in the order
 // Mitsuba 3's `path` integrator does, which the gradient-domain base path
 // (core/gradient/base_path.h) replays.
 #pragma once
@@ -41,6 +42,9 @@ struct PathState {
   bool prev_bsdf_delta = true;
 
   bool hit = false;       // what the closest-hit query of `ray` returned
+  // Last rays only (cast_last): something that emits nothing lies before the
+  // emitter or environment that `hit` and `ray` point at, so nothing is seen.
+  bool blocked = false;
   SurfaceInteraction si;  // the vertex it found
   const Bsdf* bsdf = nullptr;  // its BSDF
   bool continues = true;  // false once the path has no next ray
@@ -78,22 +82,9 @@ inline void prefetch_for_next_vertex(const FrameScene& scene, const PathState& s
 }
 
 // The depth of a path's last vertex under max_depth (INT_MAX: unbounded).
-// There only emission seen along the ray counts; nothing is sampled. A stream
-// query computes it once for all its hits.
+// There only emission seen along the ray counts; nothing is sampled.
 inline int last_vertex_depth(const PathTracerSettings& settings) {
   return settings.max_depth >= 0 ? settings.max_depth - 1 : std::numeric_limits<int>::max();
-}
-
-// Fills st->si for the closest hit `hit` of st->ray. At the last vertex a hit
-// on a shape that emits nothing contributes nothing, and add_emission reads
-// only its shape there, so the shading data (interpolation, frame, uv) is not
-// computed (on veach-mis, max_depth 3, up to a third of the closest hits).
-inline void take_hit(const FrameScene& scene, int last_depth, const RayHit& hit, PathState* st) {
-  if (st->depth >= last_depth && scene.emitter_of_shape(hit.id) < 0) {
-    st->si.shape = hit.id;
-    return;
-  }
-  scene.interaction(st->ray, hit, &st->si);
 }
 
 // ---- After the closest-hit query (st->hit, st->si) ----
@@ -102,7 +93,7 @@ inline void take_hit(const FrameScene& scene, int last_depth, const RayHit& hit,
 // st->continues: whether the path goes on from this vertex.
 inline void add_emission(const FrameScene& scene, const PathTracerSettings& settings, PathState* st) {
   const SurfaceInteraction& si = st->si;
-  if (!(st->depth == 0 && settings.hide_emitters)) {
+  if (!(st->depth == 0 && settings.hide_emitters) && !st->blocked) {
     Rgb emitted;
     float emitter_pdf = 0;
     if (!st->hit) {
@@ -199,19 +190,67 @@ inline PathSample finish_path(const PathState& st, PathCounters& counters) {
   return out;
 }
 
-// The two ray casts, counted (and logged for gdvr-bench) as they are made.
+// ---- The ray casts, counted (and logged for gdvr-bench) as they are made ----
+
+inline void log_ray(const Ray& ray, bool shadow, GeometrySet set, uint32_t stream, PathCounters& counters) {
+  ++counters.rays;
+  if (counters.ray_log) counters.ray_log->push_back({ray, shadow, set == GeometrySet::kEmitters, stream});
+}
+
+// The last ray under max_depth looks for emission only, so it does not ask
+// for the closest hit in the whole scene. It asks the emitters-only BVH
+// (GeometrySet::kEmitters: a few spheres or quads in most scenes) which
+// emitter it would reach, then, with an any-hit query that stops at the first
+// blocker, whether anything lies before it; a ray that reaches no emitter in a
+// scene without an environment needs no second query. The answer is the
+// closest-hit query's: an emitter is seen iff nothing lies before it, and
+// whatever lies before it emits nothing (it would be the closest emitter).
+// The second query stops short of the emitter as a shadow ray does
+// (kShadowEpsilon). On veach-mis (max_depth 3) the last rays are about a
+// quarter of all rays (docs/foundation.md).
+//
+// What the emitters-only query answered (`found`, `hit`) sets in st; returns
+// whether the any-hit query over st->shadow must decide whether it is seen.
+// The shadow ray is free: at a path's last ray no shadow ray is pending.
+inline bool take_last_hit(const FrameScene& scene, bool found, const RayHit& hit, PathState* st) {
+  st->hit = found;
+  st->blocked = false;
+  if (found) {
+    scene.interaction(st->ray, hit, &st->si);
+    st->shadow = st->ray;
+    // si.t, not hit.t: a sphere's t is solved from the ray alone, so single
+    // and stream casts ask the same any-hit question.
+    st->shadow.tmax = st->si.t * (1.0f - kShadowEpsilon);
+    return true;
+  }
+  st->shadow = st->ray;
+  return scene.has_environment();
+}
+
+inline void cast_last(const FrameScene& scene, PathState* st, PathCounters& counters) {
+  log_ray(st->ray, false, GeometrySet::kEmitters, 0, counters);
+  RayHit hit;
+  const bool found = scene.intersect_emitter_hit(st->ray, &hit);
+  if (!take_last_hit(scene, found, hit, st)) return;
+  log_ray(st->shadow, true, GeometrySet::kAll, 0, counters);
+  st->blocked = scene.occluded(st->shadow);
+}
+
 inline void cast_closest(const FrameScene& scene, const PathTracerSettings& settings, PathState* st,
                          PathCounters& counters) {
-  ++counters.rays;
-  if (counters.ray_log) counters.ray_log->push_back({st->ray, false});
+  if (st->depth >= last_vertex_depth(settings)) {
+    cast_last(scene, st, counters);
+    return;
+  }
+  log_ray(st->ray, false, GeometrySet::kAll, 0, counters);
   RayHit hit;
   st->hit = scene.intersect_hit(st->ray, &hit);
-  if (st->hit) take_hit(scene, last_vertex_depth(settings), hit, st);
+  st->blocked = false;
+  if (st->hit) scene.interaction(st->ray, hit, &st->si);
 }
 
 inline bool cast_shadow(const FrameScene& scene, const PathState& st, PathCounters& counters) {
-  ++counters.rays;
-  if (counters.ray_log) counters.ray_log->push_back({st.shadow, true});
+  log_ray(st.shadow, true, GeometrySet::kAll, 0, counters);
   return scene.occluded(st.shadow);
 }
 
@@ -219,13 +258,17 @@ inline bool cast_shadow(const FrameScene& scene, const PathState& st, PathCounte
 // query (Accelerator::intersect_stream). The answers are those of the single
 // casts: triangle hits bit for bit, and a sphere's hit point is solved from
 // the ray in FrameScene::interaction, not taken from the kernel's rounding.
-inline void log_stream(const PathState* paths, const int* which, int n, bool shadow, PathCounters& counters) {
-  counters.rays += uint64_t(n);
-  if (!counters.ray_log) return;
+// `shadow`: the paths' shadow rays, else their next rays.
+inline void log_stream(const PathState* paths, const int* which, int n, bool shadow, GeometrySet set,
+                       PathCounters& counters) {
+  if (!counters.ray_log) {
+    counters.rays += uint64_t(n);
+    return;
+  }
   const uint32_t stream = ++counters.streams_logged;
   for (int k = 0; k < n; ++k) {
     const PathState& st = paths[which[k]];
-    counters.ray_log->push_back({shadow ? st.shadow : st.ray, shadow, stream});
+    log_ray(shadow ? st.shadow : st.ray, shadow, set, stream, counters);
   }
 }
 
@@ -235,23 +278,54 @@ inline void log_stream(const PathState* paths, const int* which, int n, bool sha
 using RayStream = RayStreamBuffer;
 static_assert(RayStream::kCapacity >= kPathBatch);
 
+// cast_last() for each of paths[which[0..n)]: two streams.
+inline void cast_last_stream(const FrameScene& scene, PathState* paths, const int* which, int n, RayStream& stream,
+                             PathCounters& counters) {
+  log_stream(paths, which, n, false, GeometrySet::kEmitters, counters);
+  for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].ray);
+  scene.accelerator().intersect_stream(stream, n, GeometrySet::kEmitters);
+  int undecided[kPathBatch];
+  int m = 0;
+  for (int k = 0; k < n; ++k) {
+    const bool found = stream.found(k);
+    if (take_last_hit(scene, found, found ? stream.hit(k) : RayHit{}, &paths[which[k]])) undecided[m++] = which[k];
+  }
+  if (m == 0) return;
+  log_stream(paths, undecided, m, true, GeometrySet::kAll, counters);
+  for (int k = 0; k < m; ++k) set_stream_ray(stream, k, paths[undecided[k]].shadow);
+  scene.accelerator().occluded_stream(stream, m);
+  for (int k = 0; k < m; ++k) paths[undecided[k]].blocked = stream.occluded(k);
+}
+
+// cast_closest() for each of paths[which[0..n)]. A batch's paths take their
+// vertices in step, so its rays are all last rays or none; each still goes
+// its own way.
 inline void cast_closest_stream(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths,
                                 const int* which, int n, RayStream& stream, PathCounters& counters) {
-  log_stream(paths, which, n, false, counters);
-  for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].ray);
-  scene.accelerator().intersect_stream(stream, n);
   const int last_depth = last_vertex_depth(settings);
+  int inner[kPathBatch], last[kPathBatch];
+  int n_inner = 0, n_last = 0;
   for (int k = 0; k < n; ++k) {
-    PathState& st = paths[which[k]];
+    if (paths[which[k]].depth >= last_depth) last[n_last++] = which[k];
+    else inner[n_inner++] = which[k];
+  }
+  if (n_last > 0) cast_last_stream(scene, paths, last, n_last, stream, counters);
+  if (n_inner == 0) return;
+  log_stream(paths, inner, n_inner, false, GeometrySet::kAll, counters);
+  for (int k = 0; k < n_inner; ++k) set_stream_ray(stream, k, paths[inner[k]].ray);
+  scene.accelerator().intersect_stream(stream, n_inner);
+  for (int k = 0; k < n_inner; ++k) {
+    PathState& st = paths[inner[k]];
     st.hit = stream.found(k);
-    if (st.hit) take_hit(scene, last_depth, stream.hit(k), &st);
+    st.blocked = false;
+    if (st.hit) scene.interaction(st.ray, stream.hit(k), &st.si);
   }
 }
 
 // resolve_shadow() for each of paths[which[0..n)].
 inline void cast_shadow_stream_and_resolve(const FrameScene& scene, PathState* paths, const int* which, int n,
                                            RayStream& stream, PathCounters& counters) {
-  log_stream(paths, which, n, true, counters);
+  log_stream(paths, which, n, true, GeometrySet::kAll, counters);
   for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].shadow);
   scene.accelerator().occluded_stream(stream, n);
   for (int k = 0; k < n; ++k) resolve_shadow(stream.occluded(k), &paths[which[k]]);

@@ -24,13 +24,14 @@ struct PathTracerSettings {
 struct RecordedRay {
   Ray ray;
   bool shadow = false;  // any-hit query
+  bool emitters_only = false;  // closest hit among the emitters (GeometrySet::kEmitters)
   // Rays cast together in one stream query share a stream number (from 1);
   // 0 for a ray cast on its own.
   uint32_t stream = 0;
 };
 
 struct PathCounters {
-  uint64_t rays = 0;            // closest-hit and shadow rays
+  uint64_t rays = 0;            // closest-hit (all or emitters-only) and shadow rays
   uint64_t invalid_samples = 0; // non-finite radiance dropped (reported, never silent)
   std::vector<RecordedRay>* ray_log = nullptr;  // benchmarks only; null in renders
   uint32_t streams_logged = 0;                  // the last RecordedRay::stream handed out

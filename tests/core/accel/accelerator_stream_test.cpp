@@ -16,7 +16,9 @@ namespace gdvr {
 namespace {
 
 // A soup of random triangles, two static spheres and an instanced (animated)
-// sphere and mesh: every geometry type and both levels of the BVH.
+// sphere and mesh: every geometry type and both levels of the BVH. A static
+// sphere and the instanced mesh emit.
+constexpr int kEmittingIds[] = {2, 4};
 std::unique_ptr<Accelerator> make_scene(std::vector<int>* sphere_ids) {
   auto accel = Accelerator::create();
   EXPECT_TRUE(accel.ok());
@@ -32,12 +34,16 @@ std::unique_ptr<Accelerator> make_scene(std::vector<int>* sphere_ids) {
       vertices.push_back(c + Vec3f(jitter(rng), jitter(rng), jitter(rng)));
     }
   }
-  EXPECT_TRUE(a->add_mesh(0, vertices.data(), vertices.size(), indices.data(), indices.size() / 3, false, Transform())
+  // Sphere 2 (static) and mesh 4 (instanced) emit: GeometrySet::kEmitters.
+  EXPECT_TRUE(a->add_mesh(0, vertices.data(), vertices.size(), indices.data(), indices.size() / 3, false, Transform(),
+                          false)
                   .ok());
-  EXPECT_TRUE(a->add_sphere(1, Vec3f(0.5f, 0.2f, -0.3f), 0.7f, false, Transform()).ok());
-  EXPECT_TRUE(a->add_sphere(2, Vec3f(-1.2f, 1.0f, 0.9f), 0.25f, false, Transform()).ok());
-  EXPECT_TRUE(a->add_sphere(3, Vec3f(0, 0, 0), 0.4f, true, Transform::translate(Vec3f(1.1f, -1.3f, 0.6f))).ok());
-  EXPECT_TRUE(a->add_mesh(4, vertices.data(), 30, indices.data(), 10, true, Transform::translate(Vec3f(0.3f, 0, 0)))
+  EXPECT_TRUE(a->add_sphere(1, Vec3f(0.5f, 0.2f, -0.3f), 0.7f, false, Transform(), false).ok());
+  EXPECT_TRUE(a->add_sphere(2, Vec3f(-1.2f, 1.0f, 0.9f), 0.25f, false, Transform(), true).ok());
+  EXPECT_TRUE(
+      a->add_sphere(3, Vec3f(0, 0, 0), 0.4f, true, Transform::translate(Vec3f(1.1f, -1.3f, 0.6f)), false).ok());
+  EXPECT_TRUE(a->add_mesh(4, vertices.data(), 30, indices.data(), 10, true, Transform::translate(Vec3f(0.3f, 0, 0)),
+                          true)
                   .ok());
   EXPECT_TRUE(a->commit().ok());
   *sphere_ids = {1, 2, 3};
@@ -76,13 +82,13 @@ int fill_stream(const std::vector<TestRay>& rays, size_t base, RayStreamBuffer* 
 // rays[0..n) as stream queries of up to RayStreamBuffer::kCapacity rays, one
 // buffer reused for all of them (as a path batch reuses its own).
 void intersect_in_streams(const Accelerator& accel, const std::vector<TestRay>& rays, std::vector<RayHit>* hits,
-                          std::vector<char>* found) {
+                          std::vector<char>* found, GeometrySet set = GeometrySet::kAll) {
   RayStreamBuffer buffer;
   hits->assign(rays.size(), RayHit{});
   found->assign(rays.size(), 0);
   for (size_t base = 0; base < rays.size(); base += RayStreamBuffer::kCapacity) {
     const int m = fill_stream(rays, base, &buffer);
-    accel.intersect_stream(buffer, m);
+    accel.intersect_stream(buffer, m, set);
     for (int i = 0; i < m; ++i) {
       (*found)[base + size_t(i)] = buffer.found(i);
       if (buffer.found(i)) (*hits)[base + size_t(i)] = buffer.hit(i);
@@ -195,6 +201,57 @@ TEST(AcceleratorStreamTest, ReusedBufferAnswersEachQueryAfresh) {
   }
   EXPECT_GT(hits, 50);
   EXPECT_GT(blocked, 10);
+}
+
+bool emits(int id) { return std::find(std::begin(kEmittingIds), std::end(kEmittingIds), id) != std::end(kEmittingIds); }
+
+// The emitters-only set answers with the closest emitting geometry along the
+// ray: the full scene's hit where that is an emitter, otherwise an emitter
+// behind it or nothing; single and stream queries agree; and an instance
+// moved after the build moves in both sets.
+TEST(AcceleratorStreamTest, EmittersOnlySetFindsTheClosestEmitter) {
+  std::vector<int> spheres;
+  auto accel = make_scene(&spheres);
+  int emitter_first = 0, emitter_behind = 0, none = 0;
+  for (int moved = 0; moved < 2; ++moved) {
+    if (moved) {
+      ASSERT_TRUE(accel->set_instance_transform(4, Transform::translate(Vec3f(-0.7f, 0.4f, 0.2f))).ok());
+      ASSERT_TRUE(accel->commit().ok());
+    }
+    const std::vector<TestRay> rays = random_rays(4000, 500u + uint32_t(moved));
+    std::vector<RayHit> stream_hits;
+    std::vector<char> found;
+    intersect_in_streams(*accel, rays, &stream_hits, &found, GeometrySet::kEmitters);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const TestRay& r = rays[i];
+      RayHit all, single;
+      const bool any = accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &all);
+      const bool emitter = accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &single, GeometrySet::kEmitters);
+      ASSERT_EQ(bool(found[i]), emitter) << moved << " " << i;
+      if (!emitter) {
+        ASSERT_FALSE(any && emits(all.id)) << moved << " " << i;
+        ++none;
+        continue;
+      }
+      const RayHit& h = stream_hits[i];
+      ASSERT_TRUE(emits(single.id)) << single.id;
+      ASSERT_EQ(h.id, single.id);
+      ASSERT_EQ(h.prim, single.prim);
+      ASSERT_TRUE(any);
+      if (emits(all.id)) {
+        ASSERT_EQ(single.id, all.id) << moved << " " << i;
+        ASSERT_EQ(single.prim, all.prim);
+        ASSERT_EQ(single.t, all.t);
+        ++emitter_first;
+      } else {
+        ASSERT_GT(single.t, all.t) << moved << " " << i;
+        ++emitter_behind;
+      }
+    }
+  }
+  EXPECT_GT(emitter_first, 50);
+  EXPECT_GT(emitter_behind, 30);
+  EXPECT_GT(none, 1000);
 }
 
 }  // namespace

@@ -25,7 +25,7 @@ constexpr int kW = 20, kH = 16;
 bool same_bits(const Rgb& a, const Rgb& b) { return std::memcmp(&a, &b, sizeof(Rgb)) == 0; }
 
 auto ray_key(const RecordedRay& r) {
-  return std::make_tuple(r.shadow, r.ray.o.x, r.ray.o.y, r.ray.o.z, r.ray.d.x, r.ray.d.y, r.ray.d.z, r.ray.tmin,
+  return std::make_tuple(r.shadow, r.emitters_only, r.ray.o.x, r.ray.o.y, r.ray.o.z, r.ray.d.x, r.ray.d.y, r.ray.d.z, r.ray.tmin,
                          r.ray.tmax);
 }
 
@@ -138,66 +138,108 @@ TEST(PathBatchSphereTest, SphereHitsAreTheSameFromStreamsAndSingleCasts) {
   EXPECT_GT(sphere_hits, int(rays.size()) / 2);
 }
 
-// At a path's last vertex (max_depth) take_hit() skips the shading data of a
-// hit on a shape that emits nothing. What add_emission() then adds, and
-// whether the path goes on, must be exactly what the full interaction gives;
-// a hit on an emitter must still get the full interaction.
-TEST(PathStagesTest, LastVertexShortcutAddsWhatTheFullInteractionAdds) {
-  auto ts = load_test_scene("veach-mis", kW, kH);  // max_depth 3, sphere and mesh emitters
+// A path's last ray under max_depth looks for emitters first (cast_last: an
+// emitters-only closest hit, then an any-hit query up to it). What
+// add_emission() then adds must be, bit for bit, what the closest hit in the
+// whole scene gives, for single casts and for streams, on area emitters
+// (veach-mis: spheres and a quad; cbox: a quad) and an environment map
+// (matpreview, whose max_depth is set here).
+class LastRayTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(LastRayTest, EmittersFirstAddsWhatTheClosestHitAdds) {
+  auto ts = load_test_scene(GetParam(), kW, kH);
   const FrameScene& scene = *ts->scene;
-  const PathTracerSettings settings = ts->render.path;
-  ASSERT_GE(settings.max_depth, 1);
+  PathTracerSettings settings = ts->render.path;
+  settings.max_depth = 3;
+  const int last_depth = last_vertex_depth(settings);
   PerspectiveCamera camera(ts->desc.camera, kW, kH);
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   std::vector<Ray> rays;
   for (int i = 0; i < 400; ++i) rays.push_back(camera.generate_ray({unit(rng) * kW, unit(rng) * kH}));
-  // Rays aimed at each emitting shape, so that emitter hits are many.
-  for (size_t i = 0; i < ts->desc.shapes.size(); ++i) {
-    if (scene.emitter_of_shape(int(i)) < 0) continue;
-    const Vec3f target = ts->desc.shapes[i].to_world.point(Vec3f(0, 0, 0));
-    for (int k = 0; k < 100; ++k) {
+  // Rays from inside the scene (blocked or not) and rays aimed at each
+  // emitting shape, so that emitter hits and blocked emitters are many.
+  for (int i = 0; i < 300; ++i) {
+    const Ray from_camera = camera.generate_ray({unit(rng) * kW, unit(rng) * kH});
+    SurfaceInteraction si;
+    if (!scene.intersect(from_camera, &si)) continue;
+    const Vec3f d = normalize(Vec3f(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng) - 0.5f));
+    rays.push_back(si.spawn_ray(dot(d, si.n) >= 0 ? d : -d));
+  }
+  // From the camera and from surfaces the camera sees towards points of each
+  // area emitter's bounds: the emitter is seen, or something is in the way.
+  for (const Bounds3f& b : scene.area_emitter_bounds()) {
+    for (int k = 0; k < 600; ++k) {
+      const Vec3f target = b.lo + (b.hi - b.lo) * Vec3f(unit(rng), unit(rng), unit(rng));
       const Ray from_camera = camera.generate_ray({unit(rng) * kW, unit(rng) * kH});
-      const Vec3f origin = from_camera.o + from_camera.d * (0.5f * unit(rng));
-      rays.push_back(Ray{origin, normalize(target - origin), 0.0f, kInfinity});
+      SurfaceInteraction si;
+      if (k % 2 == 0 || !scene.intersect(from_camera, &si)) {
+        const Vec3f origin = from_camera.o + from_camera.d * (0.5f * unit(rng));
+        rays.push_back(Ray{origin, normalize(target - origin), 0.0f, kInfinity});
+      } else {
+        rays.push_back(si.spawn_ray(normalize(target - si.p)));
+      }
     }
   }
-  int emitter_hits = 0, other_hits = 0;
-  for (const Ray& ray : rays) {
+  auto start = [&](const Ray& ray, PathState* st) {
+    start_path(st, ray, Sampler(7, 0, 1, 2, 3));
+    st->depth = last_depth;
+    st->throughput = Rgb(0.5f, 0.25f, 2.0f);
+    st->prev_p = ray.o;
+    st->prev_bsdf_pdf = 0.7f;
+    st->prev_bsdf_delta = false;
+  };
+  std::vector<PathState> streamed(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) start(rays[i], &streamed[i]);
+  PathCounters counters;
+  RayStream stream;
+  for (size_t base = 0; base < rays.size(); base += kPathBatch) {
+    int which[kPathBatch];
+    const int n = int(std::min(rays.size() - base, size_t(kPathBatch)));
+    for (int k = 0; k < n; ++k) which[k] = int(base) + k;
+    cast_closest_stream(scene, settings, streamed.data(), which, n, stream, counters);
+  }
+  // What the rays met, by the closest hit in the whole scene.
+  int emitter_seen = 0, emitter_hidden = 0, environment_seen = 0, environment_hidden = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    PathState full, single;
+    start(rays[i], &full);
+    start(rays[i], &single);
     RayHit hit;
-    if (!scene.intersect_hit(ray, &hit)) continue;
-    for (int depth : {settings.max_depth - 1, std::max(0, settings.max_depth - 2)}) {
-      PathState shortcut, full;
-      for (PathState* st : {&shortcut, &full}) {
-        start_path(st, ray, Sampler(7, 0, 1, 2, 3));
-        st->depth = depth;
-        st->throughput = Rgb(0.5f, 0.25f, 2.0f);
-        st->prev_p = ray.o;
-        st->prev_bsdf_pdf = 0.7f;
-        st->prev_bsdf_delta = false;
-        st->hit = true;
-      }
-      take_hit(scene, last_vertex_depth(settings), hit, &shortcut);
-      scene.interaction(ray, hit, &full.si);
-      const bool last = depth + 1 >= settings.max_depth;
-      const bool emits = scene.emitter_of_shape(hit.id) >= 0;
-      if (last) (emits ? emitter_hits : other_hits) += 1;
-      if (!last || emits) {  // the full interaction, bit for bit
-        ASSERT_EQ(0, std::memcmp(&shortcut.si.p, &full.si.p, sizeof(Vec3f)));
-        ASSERT_EQ(0, std::memcmp(&shortcut.si.wi, &full.si.wi, sizeof(Vec3f)));
-        ASSERT_EQ(0, std::memcmp(&shortcut.si.uv, &full.si.uv, sizeof(Vec2f)));
-      }
-      add_emission(scene, settings, &shortcut);
-      add_emission(scene, settings, &full);
-      EXPECT_TRUE(same_bits(shortcut.result, full.result));
-      EXPECT_TRUE(same_bits(shortcut.direct, full.direct));
-      EXPECT_EQ(shortcut.continues, full.continues);
-      EXPECT_EQ(shortcut.continues, !last);
+    full.hit = scene.intersect_hit(rays[i], &hit);
+    if (full.hit) scene.interaction(rays[i], hit, &full.si);
+    cast_closest(scene, settings, &single, counters);
+    for (PathState* st : {&full, &single, &streamed[i]}) add_emission(scene, settings, st);
+    for (const PathState* st : {&single, &streamed[i]}) {
+      ASSERT_TRUE(same_bits(st->result, full.result)) << "ray " << i;
+      ASSERT_TRUE(same_bits(st->direct, full.direct)) << "ray " << i;
+      ASSERT_FALSE(st->continues);
+    }
+    RayHit emitter;
+    if (scene.intersect_emitter_hit(rays[i], &emitter)) {
+      // (The back of a one-sided emitter is met but emits nothing: neither.)
+      if (!(full.hit && hit.id == emitter.id)) ++emitter_hidden;
+      else if (!full.result.is_black()) ++emitter_seen;
+    } else if (scene.has_environment()) {
+      (full.hit ? environment_hidden : environment_seen) += 1;
     }
   }
-  EXPECT_GT(emitter_hits, 100);
-  EXPECT_GT(other_hits, 100);
+  // Every outcome occurs many times.
+  if (scene.area_emitter_bounds().empty()) {
+    EXPECT_GT(environment_seen, 100);
+    EXPECT_GT(environment_hidden, 100);
+  } else {
+    EXPECT_GT(emitter_seen, 100);
+    EXPECT_GT(emitter_hidden, 30);
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(Scenes, LastRayTest, ::testing::Values("cbox", "veach-mis", "matpreview"),
+                         [](const auto& info) {
+                           std::string n = info.param;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
 
 INSTANTIATE_TEST_SUITE_P(Scenes, PathBatchTest, ::testing::Values("cbox", "veach-mis", "matpreview"),
                          [](const auto& info) {
