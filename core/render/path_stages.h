@@ -42,8 +42,9 @@ struct PathState {
   bool prev_bsdf_delta = true;
 
   bool hit = false;       // what the closest-hit query of `ray` returned
-  // Last rays only (cast_last): something that emits nothing lies before the
-  // emitter or environment that `hit` and `ray` point at, so nothing is seen.
+  // Set by a last ray (cast_last): something that emits nothing lies before
+  // the emitter or environment that `hit` and `ray` point at, so nothing is
+  // seen. False until then (start_path), and no other cast writes it.
   bool blocked = false;
   SurfaceInteraction si;  // the vertex it found
   const Bsdf* bsdf = nullptr;  // its BSDF
@@ -71,6 +72,7 @@ inline void start_path(PathState* st, const Ray& camera_ray, const Sampler& samp
   st->prev_bsdf_pdf = 1.0f;
   st->prev_bsdf_delta = true;
   st->continues = true;
+  st->blocked = false;
   st->shadow_pending = false;
 }
 
@@ -245,7 +247,6 @@ inline void cast_closest(const FrameScene& scene, const PathTracerSettings& sett
   log_ray(st->ray, false, GeometrySet::kAll, 0, counters);
   RayHit hit;
   st->hit = scene.intersect_hit(st->ray, &hit);
-  st->blocked = false;
   if (st->hit) scene.interaction(st->ray, hit, &st->si);
 }
 
@@ -297,29 +298,30 @@ inline void cast_last_stream(const FrameScene& scene, PathState* paths, const in
   for (int k = 0; k < m; ++k) paths[undecided[k]].blocked = stream.occluded(k);
 }
 
-// cast_closest() for each of paths[which[0..n)]. A batch's paths take their
-// vertices in step, so its rays are all last rays or none; each still goes
-// its own way.
-inline void cast_closest_stream(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths,
-                                const int* which, int n, RayStream& stream, PathCounters& counters) {
-  const int last_depth = last_vertex_depth(settings);
-  int inner[kPathBatch], last[kPathBatch];
-  int n_inner = 0, n_last = 0;
+// The closest hits of paths[which[0..n)] (none at its last ray) as one stream.
+inline void cast_inner_stream(const FrameScene& scene, PathState* paths, const int* which, int n,
+                              RayStream& stream, PathCounters& counters) {
+  log_stream(paths, which, n, false, GeometrySet::kAll, counters);
+  for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].ray);
+  scene.accelerator().intersect_stream(stream, n);
   for (int k = 0; k < n; ++k) {
-    if (paths[which[k]].depth >= last_depth) last[n_last++] = which[k];
-    else inner[n_inner++] = which[k];
-  }
-  if (n_last > 0) cast_last_stream(scene, paths, last, n_last, stream, counters);
-  if (n_inner == 0) return;
-  log_stream(paths, inner, n_inner, false, GeometrySet::kAll, counters);
-  for (int k = 0; k < n_inner; ++k) set_stream_ray(stream, k, paths[inner[k]].ray);
-  scene.accelerator().intersect_stream(stream, n_inner);
-  for (int k = 0; k < n_inner; ++k) {
-    PathState& st = paths[inner[k]];
+    PathState& st = paths[which[k]];
     st.hit = stream.found(k);
-    st.blocked = false;
     if (st.hit) scene.interaction(st.ray, stream.hit(k), &st.si);
   }
+}
+
+// cast_closest() for each of paths[which[0..n)]. A batch's paths take their
+// vertices in step (path_batch.cpp: all start at depth 0, and every path
+// that goes on goes one deeper), so its rays are all last rays or none and
+// the first path decides for the stream (sorting each stream's paths by
+// depth cost 0.6 % of cbox's instructions). PathBatchTest checks the batches
+// against trace_path, which decides path by path.
+inline void cast_closest_stream(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths,
+                                const int* which, int n, RayStream& stream, PathCounters& counters) {
+  if (n <= 0) return;
+  if (paths[which[0]].depth >= last_vertex_depth(settings)) cast_last_stream(scene, paths, which, n, stream, counters);
+  else cast_inner_stream(scene, paths, which, n, stream, counters);
 }
 
 // resolve_shadow() for each of paths[which[0..n)].
