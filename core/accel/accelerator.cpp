@@ -275,10 +275,11 @@ bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax, bool instan
   return read_occluded(ray);
 }
 
-void Accelerator::intersect_stream(RayStreamBuffer& rays, int n, GeometrySet set) const {
+void Accelerator::intersect_stream(RayStreamBuffer& rays, int n, GeometrySet set, RayCoherence coherence) const {
   if (n <= 0) return;
   RTCIntersectContext context;
-  rtcInitIntersectContext(&context);  // incoherent: the coherent flag's sorting was 2x slower here
+  rtcInitIntersectContext(&context);  // incoherent unless told: the flag slows rays that part
+  if (coherence == RayCoherence::kCoherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   RTCRayHit* records = embree_records(rays.records_);
   RTCScene scene = impl_->scene(set);
   if (n == 1) rtcIntersect1(scene, &context, records);  // the stream set-up buys nothing for one ray

@@ -100,6 +100,14 @@ class RayStreamBuffer {
 // spheres or quads in most scenes).
 enum class GeometrySet { kAll, kEmitters };
 
+// How a stream's rays relate to each other. kCoherent: nearly parallel rays
+// from nearly one point, such as a path batch's camera rays (the samples of a
+// few neighbouring pixels), which Embree then traces as packets that stay
+// together: 5-10 % less render time on the bundled scenes (docs/foundation.md,
+// eleventh round). For rays that part (every bounce, and shadow rays too) the
+// flag costs time, so kIncoherent is the default.
+enum class RayCoherence { kIncoherent, kCoherent };
+
 class Accelerator {
  public:
   static Expected<std::unique_ptr<Accelerator>> create();
@@ -133,8 +141,13 @@ class Accelerator {
   // (docs/foundation.md). The answers are those of intersect() and
   // occluded() (triangles bit for bit; a sphere's t to within an ulp or two,
   // as its packet kernel rounds differently). Occlusion streams test all
-  // geometry (there is no instanced_only form).
-  void intersect_stream(RayStreamBuffer& rays, int n, GeometrySet set = GeometrySet::kAll) const;
+  // geometry (there is no instanced_only form). One exception: where two
+  // triangles are met at exactly the same t (coplanar overlapping faces, as
+  // the Cornell box's ceiling under its light), either is the closest hit and
+  // which one Embree reports depends on its traversal order, which a coherent
+  // stream changes.
+  void intersect_stream(RayStreamBuffer& rays, int n, GeometrySet set = GeometrySet::kAll,
+                        RayCoherence coherence = RayCoherence::kIncoherent) const;
   void occluded_stream(RayStreamBuffer& rays, int n) const;
 
  private:

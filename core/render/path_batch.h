@@ -7,7 +7,9 @@
 // go to Embree as one stream, which it traces in SIMD packets, faster per
 // ray than one at a time (docs/foundation.md). Each path's numbers and
 // arithmetic are those of trace_path(), and the stream's hits those of single
-// casts, so its radiance is the same bit for bit.
+// casts, so its radiance is the same bit for bit (but where its camera ray,
+// cast in a coherent stream, meets two triangles at exactly the same t:
+// RayCoherence in accelerator.h).
 #pragma once
 
 #include <cstdint>

@@ -3,7 +3,8 @@
 // trace_path_batch() (path_batch.h) runs a batch of paths stage by stage, so
 // that many independent paths' shading sits between two ray casts. Both call
 // the same functions, so a path's radiance is the same bit for bit whichever
-// driver ran it.
+// driver ran it (but where its camera ray meets two triangles at exactly the
+// same t: RayCoherence in accelerator.h).
 //
 // Per vertex:
 //   [closest hit] -> add_emission -> sample_emitter -> connect_emitter
@@ -194,9 +195,11 @@ inline PathSample finish_path(const PathState& st, PathCounters& counters) {
 
 // ---- The ray casts, counted (and logged for gdvr-bench) as they are made ----
 
-inline void log_ray(const Ray& ray, bool shadow, GeometrySet set, uint32_t stream, PathCounters& counters) {
+inline void log_ray(const Ray& ray, bool shadow, GeometrySet set, uint32_t stream, PathCounters& counters,
+                    RayCoherence coherence = RayCoherence::kIncoherent) {
   ++counters.rays;
-  if (counters.ray_log) counters.ray_log->push_back({ray, shadow, set == GeometrySet::kEmitters, stream});
+  if (counters.ray_log)
+    counters.ray_log->push_back({ray, shadow, set == GeometrySet::kEmitters, coherence == RayCoherence::kCoherent, stream});
 }
 
 // The last ray under max_depth looks for emission only, so it does not ask
@@ -257,11 +260,12 @@ inline bool cast_shadow(const FrameScene& scene, const PathState& st, PathCounte
 
 // The same casts for the paths paths[which[0..n)] (n <= kPathBatch) at once, as one stream
 // query (Accelerator::intersect_stream). The answers are those of the single
-// casts: triangle hits bit for bit, and a sphere's hit point is solved from
-// the ray in FrameScene::interaction, not taken from the kernel's rounding.
+// casts: triangle hits bit for bit (but at exact ties in coherent streams),
+// and a sphere's hit point is solved from the ray in
+// FrameScene::interaction, not taken from the kernel's rounding.
 // `shadow`: the paths' shadow rays, else their next rays.
 inline void log_stream(const PathState* paths, const int* which, int n, bool shadow, GeometrySet set,
-                       PathCounters& counters) {
+                       RayCoherence coherence, PathCounters& counters) {
   if (!counters.ray_log) {
     counters.rays += uint64_t(n);
     return;
@@ -269,7 +273,7 @@ inline void log_stream(const PathState* paths, const int* which, int n, bool sha
   const uint32_t stream = ++counters.streams_logged;
   for (int k = 0; k < n; ++k) {
     const PathState& st = paths[which[k]];
-    log_ray(shadow ? st.shadow : st.ray, shadow, set, stream, counters);
+    log_ray(shadow ? st.shadow : st.ray, shadow, set, stream, counters, coherence);
   }
 }
 
@@ -279,12 +283,13 @@ inline void log_stream(const PathState* paths, const int* which, int n, bool sha
 using RayStream = RayStreamBuffer;
 static_assert(RayStream::kCapacity >= kPathBatch);
 
-// cast_last() for each of paths[which[0..n)]: two streams.
-inline void cast_last_stream(const FrameScene& scene, PathState* paths, const int* which, int n, RayStream& stream,
-                             PathCounters& counters) {
-  log_stream(paths, which, n, false, GeometrySet::kEmitters, counters);
+// cast_last() for each of paths[which[0..n)]: two streams, the first of them
+// `coherence`.
+inline void cast_last_stream(const FrameScene& scene, PathState* paths, const int* which, int n,
+                             RayCoherence coherence, RayStream& stream, PathCounters& counters) {
+  log_stream(paths, which, n, false, GeometrySet::kEmitters, coherence, counters);
   for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].ray);
-  scene.accelerator().intersect_stream(stream, n, GeometrySet::kEmitters);
+  scene.accelerator().intersect_stream(stream, n, GeometrySet::kEmitters, coherence);
   int undecided[kPathBatch];
   int m = 0;
   for (int k = 0; k < n; ++k) {
@@ -292,7 +297,7 @@ inline void cast_last_stream(const FrameScene& scene, PathState* paths, const in
     if (take_last_hit(scene, found, found ? stream.hit(k) : RayHit{}, &paths[which[k]])) undecided[m++] = which[k];
   }
   if (m == 0) return;
-  log_stream(paths, undecided, m, true, GeometrySet::kAll, counters);
+  log_stream(paths, undecided, m, true, GeometrySet::kAll, RayCoherence::kIncoherent, counters);
   for (int k = 0; k < m; ++k) set_stream_ray(stream, k, paths[undecided[k]].shadow);
   scene.accelerator().occluded_stream(stream, m);
   for (int k = 0; k < m; ++k) paths[undecided[k]].blocked = stream.occluded(k);
@@ -300,10 +305,10 @@ inline void cast_last_stream(const FrameScene& scene, PathState* paths, const in
 
 // The closest hits of paths[which[0..n)] (none at its last ray) as one stream.
 inline void cast_inner_stream(const FrameScene& scene, PathState* paths, const int* which, int n,
-                              RayStream& stream, PathCounters& counters) {
-  log_stream(paths, which, n, false, GeometrySet::kAll, counters);
+                              RayCoherence coherence, RayStream& stream, PathCounters& counters) {
+  log_stream(paths, which, n, false, GeometrySet::kAll, coherence, counters);
   for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].ray);
-  scene.accelerator().intersect_stream(stream, n);
+  scene.accelerator().intersect_stream(stream, n, GeometrySet::kAll, coherence);
   for (int k = 0; k < n; ++k) {
     PathState& st = paths[which[k]];
     st.hit = stream.found(k);
@@ -317,17 +322,25 @@ inline void cast_inner_stream(const FrameScene& scene, PathState* paths, const i
 // the first path decides for the stream (sorting each stream's paths by
 // depth cost 0.6 % of cbox's instructions). PathBatchTest checks the batches
 // against trace_path, which decides path by path.
+//
+// The same holds for coherence: at depth 0 the stream is the batch's camera
+// rays, which trace_tile_samples fills with consecutive samples of
+// neighbouring pixels, so Embree traces them as coherent packets (5-10 % less
+// render time; every later stream has parted). Their hits are those of single
+// casts but at exact ties (RayCoherence in accelerator.h).
 inline void cast_closest_stream(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths,
                                 const int* which, int n, RayStream& stream, PathCounters& counters) {
   if (n <= 0) return;
-  if (paths[which[0]].depth >= last_vertex_depth(settings)) cast_last_stream(scene, paths, which, n, stream, counters);
-  else cast_inner_stream(scene, paths, which, n, stream, counters);
+  const PathState& first = paths[which[0]];
+  const RayCoherence coherence = first.depth == 0 ? RayCoherence::kCoherent : RayCoherence::kIncoherent;
+  if (first.depth >= last_vertex_depth(settings)) cast_last_stream(scene, paths, which, n, coherence, stream, counters);
+  else cast_inner_stream(scene, paths, which, n, coherence, stream, counters);
 }
 
 // resolve_shadow() for each of paths[which[0..n)].
 inline void cast_shadow_stream_and_resolve(const FrameScene& scene, PathState* paths, const int* which, int n,
                                            RayStream& stream, PathCounters& counters) {
-  log_stream(paths, which, n, true, GeometrySet::kAll, counters);
+  log_stream(paths, which, n, true, GeometrySet::kAll, RayCoherence::kIncoherent, counters);
   for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].shadow);
   scene.accelerator().occluded_stream(stream, n);
   for (int k = 0; k < n; ++k) resolve_shadow(stream.occluded(k), &paths[which[k]]);

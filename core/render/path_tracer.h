@@ -25,6 +25,7 @@ struct RecordedRay {
   Ray ray;
   bool shadow = false;  // any-hit query
   bool emitters_only = false;  // closest hit among the emitters (GeometrySet::kEmitters)
+  bool coherent = false;  // cast in a stream flagged RayCoherence::kCoherent
   // Rays cast together in one stream query share a stream number (from 1);
   // 0 for a ray cast on its own.
   uint32_t stream = 0;

@@ -11,13 +11,16 @@
 //    shading), on the same thread count, three ways: one ray per call
 //    (rtcIntersect1 / rtcOccluded1) in cast order and in path order, and in
 //    cast order as the streams the path tracer cast them in (rtcIntersect1M /
-//    rtcOccluded1M).
+//    rtcOccluded1M), each with the coherence flag the path tracer gave it
+//    (its camera rays go as coherent streams), so the limit gains whatever
+//    the flag gains.
 // The ratio of (1) to the fastest replay in (2) is the share of the
 // ray-casting limit the path tracer reaches. Each figure is the median of --runs runs measured in the same process.
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <chrono>
 #include <cstdio>
@@ -108,7 +111,9 @@ double replay_single(const Accelerator& accel, const std::vector<RecordedRay>& r
 
 bool rays_differ_in_kind(const std::vector<RecordedRay>& rays, size_t begin, size_t end) {
   for (size_t i = begin + 1; i < end; ++i)
-    if (rays[i].shadow != rays[begin].shadow || rays[i].emitters_only != rays[begin].emitters_only) return true;
+    if (rays[i].shadow != rays[begin].shadow || rays[i].emitters_only != rays[begin].emitters_only ||
+        rays[i].coherent != rays[begin].coherent)
+      return true;
   return false;
 }
 
@@ -144,7 +149,8 @@ double replay_streams(const Accelerator& accel, const std::vector<RecordedRay>& 
           accel.occluded_stream(buffer, n);
           for (int k = 0; k < n; ++k) local += buffer.occluded(k);
         } else {
-          accel.intersect_stream(buffer, n, geometry_set(rays[begin]));
+          accel.intersect_stream(buffer, n, geometry_set(rays[begin]),
+                                 rays[begin].coherent ? RayCoherence::kCoherent : RayCoherence::kIncoherent);
           for (int k = 0; k < n; ++k) local += buffer.found(k);
         }
       }
@@ -202,7 +208,15 @@ int main(int argc, char** argv) {
   // bare runs so that both see the same machine load (this machine is shared).
   const std::vector<RecordedRay> cast_order = record_rays(frame_scene, s, RayOrder::kCast);
   const std::vector<RecordedRay> path_order = record_rays(frame_scene, s, RayOrder::kPath);
-  if (cast_order.size() != path_order.size()) {
+  // The same paths either way, so the same rays, but for the rare camera ray
+  // that meets two triangles at exactly the same t (coplanar overlapping
+  // faces, as under the Cornell box's light): the batches' coherent camera
+  // streams may report the other one (RayCoherence in accelerator.h), and the
+  // path goes on from there. Rates are per ray, so a few such paths do not
+  // matter; more than 1e-4 of the rays would mean the recordings went wrong.
+  const double count_difference =
+      std::abs(double(cast_order.size()) - double(path_order.size())) / double(std::max<size_t>(1, cast_order.size()));
+  if (cast_order.empty() || count_difference > 1e-4) {
     std::fprintf(stderr, "gdvr-bench: the two recordings differ (%zu / %zu rays)\n", cast_order.size(),
                  path_order.size());
     return 1;

@@ -82,13 +82,14 @@ int fill_stream(const std::vector<TestRay>& rays, size_t base, RayStreamBuffer* 
 // rays[0..n) as stream queries of up to RayStreamBuffer::kCapacity rays, one
 // buffer reused for all of them (as a path batch reuses its own).
 void intersect_in_streams(const Accelerator& accel, const std::vector<TestRay>& rays, std::vector<RayHit>* hits,
-                          std::vector<char>* found, GeometrySet set = GeometrySet::kAll) {
+                          std::vector<char>* found, GeometrySet set = GeometrySet::kAll,
+                          RayCoherence coherence = RayCoherence::kIncoherent) {
   RayStreamBuffer buffer;
   hits->assign(rays.size(), RayHit{});
   found->assign(rays.size(), 0);
   for (size_t base = 0; base < rays.size(); base += RayStreamBuffer::kCapacity) {
     const int m = fill_stream(rays, base, &buffer);
-    accel.intersect_stream(buffer, m, set);
+    accel.intersect_stream(buffer, m, set, coherence);
     for (int i = 0; i < m; ++i) {
       (*found)[base + size_t(i)] = buffer.found(i);
       if (buffer.found(i)) (*hits)[base + size_t(i)] = buffer.hit(i);
@@ -252,6 +253,104 @@ TEST(AcceleratorStreamTest, EmittersOnlySetFindsTheClosestEmitter) {
   EXPECT_GT(emitter_first, 50);
   EXPECT_GT(emitter_behind, 30);
   EXPECT_GT(none, 1000);
+}
+
+// Coherent streams (RayCoherence::kCoherent: a path batch's camera rays)
+// answer as single queries do, for the camera-like bundles they are meant for
+// and, only slower, for rays that part: Embree's coherent packets take another
+// traversal order, which may decide nothing but exact ties (the next test).
+TEST(AcceleratorStreamTest, CoherentStreamsMatchSingleRayQueries) {
+  std::vector<int> spheres;
+  auto accel = make_scene(&spheres);
+  // Bundles as a batch's camera rays: 64 rays from one eye through a small
+  // patch of directions, the patch swept over the scene, plus random rays.
+  std::vector<TestRay> rays;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+  const Vec3f eye(0.2f, -0.1f, -6.0f);
+  for (int patch = 0; patch < 40; ++patch) {
+    const float cx = -0.45f + 0.9f * u01(rng), cy = -0.45f + 0.9f * u01(rng);
+    for (int k = 0; k < RayStreamBuffer::kCapacity; ++k) {
+      TestRay r;
+      r.origin = eye;
+      r.dir = normalize(Vec3f(cx + 0.01f * u01(rng), cy + 0.01f * u01(rng), 1.0f));
+      r.tmin = 0;
+      r.tmax = std::numeric_limits<float>::infinity();
+      rays.push_back(r);
+    }
+  }
+  const std::vector<TestRay> random = random_rays(640, 5u);
+  rays.insert(rays.end(), random.begin(), random.end());
+  int hits = 0, misses = 0, sphere_hits = 0, emitter_hits = 0;
+  for (GeometrySet set : {GeometrySet::kAll, GeometrySet::kEmitters}) {
+    std::vector<RayHit> stream_hits;
+    std::vector<char> found;
+    intersect_in_streams(*accel, rays, &stream_hits, &found, set, RayCoherence::kCoherent);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      const TestRay& r = rays[i];
+      RayHit single;
+      const bool single_found = accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &single, set);
+      ASSERT_EQ(bool(found[i]), single_found) << "ray " << i;
+      if (!single_found) {
+        ++misses;
+        continue;
+      }
+      (set == GeometrySet::kAll ? hits : emitter_hits)++;
+      const RayHit& h = stream_hits[i];
+      ASSERT_EQ(h.id, single.id) << "ray " << i;
+      ASSERT_EQ(h.prim, single.prim) << "ray " << i;
+      if (is_sphere(spheres, h.id)) {
+        ++sphere_hits;
+        EXPECT_NEAR(h.t, single.t, 4e-6f * single.t) << "ray " << i;
+      } else {
+        EXPECT_EQ(h.t, single.t) << "ray " << i;
+        EXPECT_EQ(h.u, single.u) << "ray " << i;
+        EXPECT_EQ(h.v, single.v) << "ray " << i;
+      }
+    }
+  }
+  EXPECT_GT(hits, 1000);
+  EXPECT_GT(misses, 300);
+  EXPECT_GT(sphere_hits, 100);
+  EXPECT_GT(emitter_hits, 50);
+}
+
+// Where two triangles are met at exactly the same t, either is the closest
+// hit. A mesh whose two triangles coincide: every query, single or stream,
+// coherent or not, reports one of them at the t of a single query, which is
+// all RayCoherence promises there.
+TEST(AcceleratorStreamTest, ExactTiesReportEitherTriangleAtTheSameT) {
+  auto created = Accelerator::create();
+  ASSERT_TRUE(created.ok());
+  std::unique_ptr<Accelerator> accel = std::move(created.value());
+  const Vec3f vertices[] = {{-4, -4, 0}, {4, -4, 0}, {0, 4, 0}};  // covers every ray below
+  const uint32_t indices[] = {0, 1, 2, 0, 1, 2};
+  ASSERT_TRUE(accel->add_mesh(0, vertices, 3, indices, 2, false, Transform(), false).ok());
+  ASSERT_TRUE(accel->commit().ok());
+  std::vector<TestRay> rays;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> spread(-0.3f, 0.3f);
+  for (int k = 0; k < 256; ++k) {
+    TestRay r;
+    r.origin = Vec3f(0, 0, -2);
+    r.dir = normalize(Vec3f(spread(rng), spread(rng), 1.0f));
+    r.tmin = 0;
+    r.tmax = std::numeric_limits<float>::infinity();
+    rays.push_back(r);
+  }
+  for (RayCoherence coherence : {RayCoherence::kIncoherent, RayCoherence::kCoherent}) {
+    std::vector<RayHit> stream_hits;
+    std::vector<char> found;
+    intersect_in_streams(*accel, rays, &stream_hits, &found, GeometrySet::kAll, coherence);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      RayHit single;
+      ASSERT_TRUE(accel->intersect(rays[i].origin, rays[i].dir, rays[i].tmin, rays[i].tmax, &single)) << i;
+      ASSERT_TRUE(found[i]) << i;
+      EXPECT_EQ(stream_hits[i].t, single.t) << i;
+      EXPECT_TRUE(stream_hits[i].prim == 0u || stream_hits[i].prim == 1u) << i;
+      EXPECT_EQ(stream_hits[i].id, 0) << i;
+    }
+  }
 }
 
 }  // namespace
