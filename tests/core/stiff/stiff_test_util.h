@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -28,13 +29,25 @@ inline std::string stiff_dir() { return std::string(GDVR_SOURCE_DIR) + "/scenes/
 
 // ---- Runtime assets (written once per process into a private temp folder) ----
 
+inline void remove_asset_dir();
+
+// ctest runs every test in a process of its own, so the folder is removed when
+// the process exits (registered after `dir` is made, so it runs before `dir`
+// is destroyed); otherwise each run of the suite would leave ~100 behind.
 inline const std::string& asset_dir() {
   static const std::string dir = [] {
     std::string d = (std::filesystem::temp_directory_path() / ("gdvr_stiff_" + std::to_string(::getpid()))).string();
     std::filesystem::create_directories(d);
     return d;
   }();
+  static const bool removed_at_exit = (std::atexit(remove_asset_dir), true);
+  (void)removed_at_exit;
   return dir;
+}
+
+inline void remove_asset_dir() {
+  std::error_code ignored;  // nothing to report at exit; a leftover folder is harmless
+  std::filesystem::remove_all(asset_dir(), ignored);
 }
 
 // 64 x 32 lat-long sky of luminance ~1 with a 2 x 2 texel sun of 1e5 x the sky.
