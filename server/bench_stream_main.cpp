@@ -26,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/tools/cli_args.h"
 #include "gdvr/v1/render_service.grpc.pb.h"
 
 namespace fs = std::filesystem;
@@ -246,9 +247,9 @@ int main(int argc, char** argv) {
     };
     if (a == "--server-bin") server_bin = next();
     else if (a == "--asset-root") assets = next();
-    else if (a == "--runs") runs = std::max(1, std::atoi(next().c_str()));
-    else if (a == "--watchers") watchers = std::max(1, std::atoi(next().c_str()));
-    else if (a == "--threads") threads = std::atoi(next().c_str());
+    else if (a == "--runs") runs = int(gdvr::tools::int_option("gdvr-bench-stream", a, next(), 1, 1000));
+    else if (a == "--watchers") watchers = int(gdvr::tools::int_option("gdvr-bench-stream", a, next(), 1, 1000));
+    else if (a == "--threads") threads = int(gdvr::tools::int_option("gdvr-bench-stream", a, next(), 0, 1024));
     else if (a == "--overhead-job") overhead_job = next();
     else if (a == "--latency-job") latency_job = next();
     else if (a == "--skip-overhead") overhead = false;

@@ -207,7 +207,13 @@ std::pair<Vec3f, float> MicrofacetDistribution::sample(Vec3f wi, Vec2f u) const 
   return {m, pdf(wi, m)};
 }
 
-float microfacet_eval_reflectance(const MicrofacetDistribution& distr, Vec3f wi, float eta) {
+namespace {
+
+// Mitsuba's quadrature of an interface's albedo: a res x res Gauss-Legendre
+// grid over the visible-normal sample space, each node's microfacet normal
+// weighted by `smith(m)` (what reaches the other side through m).
+template <typename SmithFn>
+float integrate_visible_normals(const MicrofacetDistribution& distr, Vec3f wi, float eta, SmithFn smith) {
   int res = eta > 1 ? 32 : 128;
   std::vector<double> nodes, weights;
   gauss_legendre(res, &nodes, &weights);
@@ -217,34 +223,30 @@ float microfacet_eval_reflectance(const MicrofacetDistribution& distr, Vec3f wi,
       Vec2f node(float(nodes[i]) * 0.5f + 0.5f, float(nodes[j]) * 0.5f + 0.5f);
       float w = float(weights[i]) * float(weights[j]);
       Vec3f m = distr.sample(wi, node).first;
-      Vec3f wo = reflect(wi, m);
-      float f = fresnel_dielectric(dot(wi, m), eta).f;
-      float smith = distr.smith_g1(wo, m) * f;
-      if (wo.z <= 0.0f || wi.z <= 0.0f) smith = 0.0f;
-      result += smith * w * 0.25f;
+      result += smith(m) * w * 0.25f;
     }
   }
   return result;
 }
 
+}  // namespace
+
+float microfacet_eval_reflectance(const MicrofacetDistribution& distr, Vec3f wi, float eta) {
+  return integrate_visible_normals(distr, wi, eta, [&](Vec3f m) {
+    Vec3f wo = reflect(wi, m);
+    float f = fresnel_dielectric(dot(wi, m), eta).f;
+    float smith = distr.smith_g1(wo, m) * f;
+    return wo.z <= 0.0f || wi.z <= 0.0f ? 0.0f : smith;
+  });
+}
+
 float microfacet_eval_transmittance(const MicrofacetDistribution& distr, Vec3f wi, float eta) {
-  int res = eta > 1 ? 32 : 128;
-  std::vector<double> nodes, weights;
-  gauss_legendre(res, &nodes, &weights);
-  float result = 0.0f;
-  for (int j = 0; j < res; ++j) {
-    for (int i = 0; i < res; ++i) {
-      Vec2f node(float(nodes[i]) * 0.5f + 0.5f, float(nodes[j]) * 0.5f + 0.5f);
-      float w = float(weights[i]) * float(weights[j]);
-      Vec3f m = distr.sample(wi, node).first;
-      FresnelResult fr = fresnel_dielectric(dot(wi, m), eta);
-      Vec3f wo = refract_about(wi, m, fr.cos_theta_t, fr.eta_ti);
-      float smith = distr.smith_g1(wo, m) * (1.0f - fr.f);
-      if (wo.z * wi.z >= 0.0f) smith = 0.0f;
-      result += smith * w * 0.25f;
-    }
-  }
-  return result;
+  return integrate_visible_normals(distr, wi, eta, [&](Vec3f m) {
+    FresnelResult fr = fresnel_dielectric(dot(wi, m), eta);
+    Vec3f wo = refract_about(wi, m, fr.cos_theta_t, fr.eta_ti);
+    float smith = distr.smith_g1(wo, m) * (1.0f - fr.f);
+    return wo.z * wi.z >= 0.0f ? 0.0f : smith;
+  });
 }
 
 }  // namespace gdvr

@@ -34,6 +34,7 @@
 #include "core/render/pt_integrator.h"
 #include "core/render/tile_scheduler.h"
 #include "core/scene/mitsuba_loader.h"
+#include "core/tools/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {
@@ -177,14 +178,12 @@ int main(int argc, char** argv) {
     std::string a = argv[i];
     if (i + 1 >= argc) { std::fprintf(stderr, "gdvr-bench: %s needs a value\n", a.c_str()); return 2; }
     std::string v = argv[++i];
-    if (a == "--spp") spp = std::max(1, std::stoi(v));
-    else if (a == "--threads") threads = std::max(1, std::stoi(v));
-    else if (a == "--runs") runs = std::max(1, std::stoi(v));
-    else if (a == "--paths-in-flight") paths_in_flight = std::clamp(std::stoi(v), 1, kPathBatch);
+    if (a == "--spp") spp = int(tools::int_option("gdvr-bench", a, v, 1, 1 << 20));
+    else if (a == "--threads") threads = int(tools::int_option("gdvr-bench", a, v, 1, 1024));
+    else if (a == "--runs") runs = int(tools::int_option("gdvr-bench", a, v, 1, 1000));
+    else if (a == "--paths-in-flight") paths_in_flight = int(tools::int_option("gdvr-bench", a, v, 1, kPathBatch));
     else if (a == "--param") {
-      size_t eq = v.find('=');
-      if (eq == std::string::npos) { std::fprintf(stderr, "gdvr-bench: --param NAME=VALUE\n"); return 2; }
-      load.params[v.substr(0, eq)] = v.substr(eq + 1);
+      if (!tools::parse_param(v, &load.params)) { std::fprintf(stderr, "gdvr-bench: --param: expected NAME=VALUE\n"); return 2; }
     } else { std::fprintf(stderr, "gdvr-bench: unknown option %s\n", a.c_str()); return 2; }
   }
   auto scene = load_mitsuba_scene(path, load);

@@ -27,6 +27,7 @@
 #include "core/recon/predicted_improvement.h"
 #include "core/recon/reconstruct.h"
 #include "core/scene/mitsuba_loader.h"
+#include "core/tools/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {
@@ -273,18 +274,18 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     if (s == "--scenes") a.scenes = split(next());
-    else if (s == "--runs") a.runs = std::atoi(next().c_str());
-    else if (s == "--spp") a.spp = std::atoi(next().c_str());
-    else if (s == "--threads") a.threads = std::atoi(next().c_str());
+    else if (s == "--runs") a.runs = int(tools::int_option("gdvr-bench-gpt", s, next(), 1, 1000));
+    else if (s == "--spp") a.spp = int(tools::int_option("gdvr-bench-gpt", s, next(), 1, 1 << 20));
+    else if (s == "--threads") a.threads = int(tools::int_option("gdvr-bench-gpt", s, next(), 1, 1024));
     else if (s == "--budgets") {
       a.budgets.clear();
-      for (const auto& b : split(next())) a.budgets.push_back(std::atof(b.c_str()));
+      for (const auto& b : split(next())) a.budgets.push_back(tools::number_option("gdvr-bench-gpt", s, b, 1e-3, 1e6));
     } else if (s == "--no-cost") a.cost = false;
     else if (s == "--no-quality") a.quality = false;
     else if (s == "--default-only") a.default_only = true;
     else if (s == "--own-sub-pixel-positions") a.own_positions = true;
     else if (s == "--pair-primal") a.pair_primal = true;
-    else if (s == "--seed") a.quality_seed = std::stoull(next());
+    else if (s == "--seed") a.quality_seed = uint64_t(tools::int_option("gdvr-bench-gpt", s, next(), 0, 1LL << 62));
     else if (s == "--source-dir") a.source_dir = next();
     else if (s == "--quality-shift") {
       auto m = parse_shift_mapping(next());

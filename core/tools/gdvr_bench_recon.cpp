@@ -22,6 +22,7 @@
 
 #include "core/recon/reconstruct.h"
 #include "core/recon/sliding_window.h"
+#include "core/tools/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {
@@ -125,16 +126,16 @@ int main(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (k == "--threads") a.threads = std::atoi(next());
-    else if (k == "--runs") a.runs = std::max(1, std::atoi(next()));
-    else if (k == "--width") a.width = std::atoi(next());
-    else if (k == "--height") a.height = std::atoi(next());
-    else if (k == "--frames") a.frames = std::atoi(next());
+    if (k == "--threads") a.threads = int(tools::int_option("gdvr-bench-recon", k, next(), 0, 1024));
+    else if (k == "--runs") a.runs = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 1000));
+    else if (k == "--width") a.width = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 16384));
+    else if (k == "--height") a.height = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 16384));
+    else if (k == "--frames") a.frames = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 100000));
     else if (k == "--no-window") a.window = false;
-    else if (k == "--l2-tolerance") a.settings.l2_tolerance = std::atof(next());
-    else if (k == "--l1-inner-tolerance") a.settings.l1_inner_tolerance = std::atof(next());
-    else if (k == "--l1-inner") a.settings.l1_inner_iterations = std::atoi(next());
-    else if (k == "--l1-outer") a.settings.l1_outer_iterations = std::atoi(next());
+    else if (k == "--l2-tolerance") a.settings.l2_tolerance = tools::number_option("gdvr-bench-recon", k, next(), 0, 1);
+    else if (k == "--l1-inner-tolerance") a.settings.l1_inner_tolerance = tools::number_option("gdvr-bench-recon", k, next(), 0, 1);
+    else if (k == "--l1-inner") a.settings.l1_inner_iterations = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 100000));
+    else if (k == "--l1-outer") a.settings.l1_outer_iterations = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 100000));
     else if (k == "--no-single") a.single = false;
     else if (k == "--methods") {
       a.methods.clear();

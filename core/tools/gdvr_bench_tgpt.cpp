@@ -35,6 +35,7 @@
 #include "core/temporal/stream_schedule.h"
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/temporal_window.h"
+#include "core/tools/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {
@@ -385,20 +386,26 @@ int main(int argc, char** argv) {
   Args a;
   for (int i = 1; i < argc; ++i) {
     std::string k = argv[i];
-    auto next = [&]() -> std::string { return i + 1 < argc ? argv[++i] : ""; };
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "gdvr-bench-tgpt: %s needs a value\n", k.c_str());
+        std::exit(2);
+      }
+      return argv[++i];
+    };
     if (k == "--quality") a.quality = true;
     else if (k == "--recon") a.recon = true;
     else if (k == "--demo") a.demo = next();
-    else if (k == "--res") a.res = std::stoi(next());
-    else if (k == "--frames") a.frames = std::stoi(next());
-    else if (k == "--spp") a.spp = std::stoi(next());
-    else if (k == "--ref-spp") a.ref_spp = std::stoi(next());
-    else if (k == "--runs") a.runs = std::stoi(next());
-    else if (k == "--window") a.window = std::stoi(next());
-    else if (k == "--threads") a.threads = std::stoi(next());
-    else if (k == "--width") a.width = std::stoi(next());
-    else if (k == "--height") a.height = std::stoi(next());
-    else if (k == "--shot") a.shot = std::stoi(next());
+    else if (k == "--res") a.res = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 16384));
+    else if (k == "--frames") a.frames = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 100000));
+    else if (k == "--spp") a.spp = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 1 << 20));
+    else if (k == "--ref-spp") a.ref_spp = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 1 << 20));
+    else if (k == "--runs") a.runs = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 1000));
+    else if (k == "--window") a.window = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 1000));
+    else if (k == "--threads") a.threads = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 1024));
+    else if (k == "--width") a.width = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 16384));
+    else if (k == "--height") a.height = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 16384));
+    else if (k == "--shot") a.shot = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 100000));
     else if (k == "--method") a.method = next();
     else if (k == "--ref-cache") a.ref_cache = next();
     else {

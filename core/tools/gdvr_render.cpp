@@ -80,8 +80,8 @@ int main(int argc, char** argv) {
     if (a == "--out") out_dir = next("--out");
     else if (a == "--spp") { if (!parse_int(next("--spp"), 1, 1 << 24, &v)) return usage("--spp: expected 1..16777216"); overrides.spp = int(v); }
     else if (a == "--time-budget") {
-      try { overrides.time_budget_s = std::stod(next("--time-budget")); } catch (...) { return usage("--time-budget: expected seconds"); }
-      if (!(overrides.time_budget_s > 0)) return usage("--time-budget: expected a positive number of seconds");
+      if (!gdvr::tools::parse_number(next("--time-budget"), 0, 1e9, &overrides.time_budget_s) || !(overrides.time_budget_s > 0))
+        return usage("--time-budget: expected a positive number of seconds");
     }
     else if (a == "--frames") { overrides.frames = next("--frames"); have_frames = true; }
     else if (a == "--threads") { if (!parse_int(next("--threads"), 1, 1024, &v)) return usage("--threads: expected 1..1024"); threads = int(v); }
@@ -102,10 +102,7 @@ int main(int argc, char** argv) {
     else if (a == "--width") { if (!parse_int(next("--width"), 1, 16384, &v)) return usage("--width: expected 1..16384"); overrides.width = int(v); }
     else if (a == "--height") { if (!parse_int(next("--height"), 1, 16384, &v)) return usage("--height: expected 1..16384"); overrides.height = int(v); }
     else if (a == "--param" || a == "-D") {
-      std::string kv = next("--param");
-      size_t eq = kv.find('=');
-      if (eq == std::string::npos || eq == 0) return usage("--param: expected NAME=VALUE");
-      params[kv.substr(0, eq)] = kv.substr(eq + 1);
+      if (!gdvr::tools::parse_param(next("--param"), &params)) return usage("--param: expected NAME=VALUE");
     } else if (a == "-h" || a == "--help") return usage(nullptr);
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (input.empty()) input = a;

@@ -95,10 +95,7 @@ int main(int argc, char** argv) {
     else if (a == "--height") { if (!parse_int(next("--height"), 1, 16384, &v)) return usage("--height: expected 1..16384"); overrides.height = int(v); }
     else if (a == "--seed") { if (!parse_int(next("--seed"), 0, (1LL << 62), &v)) return usage("--seed: expected a non-negative integer"); overrides.seed = uint64_t(v); seed_set = true; }
     else if (a == "--param" || a == "-D") {
-      std::string kv = next("--param");
-      size_t eq = kv.find('=');
-      if (eq == std::string::npos || eq == 0) return usage("--param: expected NAME=VALUE");
-      params[kv.substr(0, eq)] = kv.substr(eq + 1);
+      if (!gdvr::tools::parse_param(next("--param"), &params)) return usage("--param: expected NAME=VALUE");
     } else if (a == "-h" || a == "--help") return usage(nullptr);
     else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
     else if (input.empty()) input = a;

@@ -2,7 +2,8 @@
 """gdvr-render's command line (ctest render_cli): the integrator, shift and
 reconstruction flags reach the job (stats.json says what ran), bad values are
 rejected with exit 2 and a message naming the flag, and a T-GPT job with the
-path-space temporal shift counts its temporal rays."""
+path-space temporal shift counts its temporal rays. The benchmark tools
+(--bench TOOL, repeatable) reject malformed numbers the same way."""
 import argparse, json, os, subprocess, sys, tempfile
 
 
@@ -17,6 +18,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--render", required=True)
     ap.add_argument("--source", required=True)
+    ap.add_argument("--bench", action="append", default=[], help="a gdvr-bench* executable")
     a = ap.parse_args()
     demo = os.path.join(a.source, "scenes", "demo", "demo_job.json")
     cbox = os.path.join(a.source, "scenes", "cbox", "cbox-rgb.xml")
@@ -45,13 +47,26 @@ def main():
         for args, needle in [(["--recon", "l3"], "l3"), (["--shift", "sideways"], "sideways"),
                              (["--temporal-shift", "warp"], "warp"), (["--alpha", "-1"], "--alpha"),
                              (["--alpha", "nan"], "--alpha"), (["--window", "0"], "--window"),
-                             (["--integrator"], "--integrator needs a value"), (["--bogus"], "unknown option --bogus")]:
+                             (["--integrator"], "--integrator needs a value"), (["--bogus"], "unknown option --bogus"),
+                             (["--time-budget", "1abc"], "--time-budget"), (["--time-budget", "inf"], "--time-budget"),
+                             (["--param", "res"], "--param"), (["--param", "=16"], "--param")]:
             p = run(a.render, [cbox, "--out", os.path.join(tmp, "bad")] + args, 2)
             if needle not in p.stderr:
                 sys.exit(f"FAIL: {args}: message does not name '{needle}':\n{p.stderr}")
         # An unknown integrator is the job's error (exit 1), naming the field.
         p = run(a.render, [cbox, "--out", os.path.join(tmp, "bad"), "--integrator", "bdpt"], 1)
         assert "bdpt" in p.stderr, p.stderr
+
+    # ---- Benchmark tools: a malformed number is exit 2 naming the option ----
+    # (std::stoi threw and std::atoi read 0 before cli_args.h's int_option.)
+    bench_args = {"gdvr-bench": [cbox], "gdvr-bench-gpt": [], "gdvr-bench-recon": [], "gdvr-bench-tgpt": [],
+                  "gdvr-bench-stream": []}
+    for exe in a.bench:
+        name = os.path.basename(exe)
+        for bad in (["--runs", "x"], ["--runs", "0"], ["--threads", "2x"]):
+            p = run(exe, bench_args[name] + bad, 2)
+            if bad[0] not in p.stderr or repr(bad[1])[1:-1] not in p.stderr:
+                sys.exit(f"FAIL: {name} {bad}: message does not name the option and value:\n{p.stderr}")
     print("render_cli: ok")
 
 
