@@ -13,6 +13,7 @@
 
 #include "core/io/image_io.h"
 #include "core/report/error_metrics.h"
+#include "core/util/path_confinement.h"
 #include "server/job_outputs.h"
 #include "server/log.h"
 #include "server/status_map.h"
@@ -88,16 +89,6 @@ bool write_file_atomic(const std::string& path, const std::string& data) {
   return !ec;
 }
 
-// True when `path` (made absolute, "..", symlinks resolved as far as they
-// exist) lies inside `root`.
-bool is_inside(const fs::path& root, const fs::path& path) {
-  std::error_code ec;
-  fs::path r = fs::weakly_canonical(fs::absolute(root), ec);
-  fs::path p = fs::weakly_canonical(fs::absolute(path), ec);
-  auto rel = p.lexically_relative(r);
-  return !rel.empty() && *rel.begin() != ".." && !rel.is_absolute();
-}
-
 }  // namespace
 
 std::string frame_file_name(int frame) {
@@ -134,7 +125,7 @@ Status JobManager::validate(const v1::JobSpec& spec, JobSpec* core_job, std::vec
   // absolute path, a symlink out) is refused before core touches the file.
   fs::path scene = spec.scene();
   fs::path resolved = scene.is_absolute() ? scene : fs::path(config_.asset_root) / scene;
-  if (!is_inside(config_.asset_root, resolved))
+  if (!is_inside_root(resolved, config_.asset_root))
     return invalid_argument("scene: '" + spec.scene() + "' is outside the asset root");
   std::error_code ec;
   if (!fs::is_regular_file(resolved, ec)) return not_found("scene: '" + spec.scene() + "' does not exist");

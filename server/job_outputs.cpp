@@ -8,6 +8,7 @@
 
 #include "core/io/image_io.h"
 #include "core/report/error_metrics.h"
+#include "core/util/path_confinement.h"
 
 namespace gdvr::server {
 namespace fs = std::filesystem;
@@ -106,14 +107,10 @@ Status JobOutputs::validate(const JobSpec& job, const std::string& ocio_config, 
         return invalid_argument("reference: '" + ref + "' may hold one %d-style frame number pattern only");
     }
     std::string path = reference_path(asset_root, ref, first_frame);
+    if (!is_inside_root(path, asset_root)) return invalid_argument("reference: '" + ref + "' is outside the asset root");
     std::error_code ec;
-    fs::path root = fs::weakly_canonical(fs::absolute(asset_root), ec);
-    fs::path p = fs::weakly_canonical(fs::absolute(path), ec);
-    auto rel = p.lexically_relative(root);
-    if (rel.empty() || *rel.begin() == ".." || rel.is_absolute())
-      return invalid_argument("reference: '" + ref + "' is outside the asset root");
-    if (!fs::is_regular_file(p, ec)) return not_found("reference: '" + ref + "' does not exist");
-    auto img = read_exr(p.string());
+    if (!fs::is_regular_file(path, ec)) return not_found("reference: '" + ref + "' does not exist");
+    auto img = read_exr(path);
     if (!img.ok()) return invalid_argument("reference: '" + ref + "' is not a readable EXR: " + img.status().message());
     if (!main_rgb(*img)) return invalid_argument("reference: '" + ref + "' has no RGB layer");
   }

@@ -16,20 +16,12 @@
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/temporal_window.h"
 #include "core/temporal/tgpt_frame.h"
+#include "core/util/path_confinement.h"
 
 namespace gdvr {
 namespace {
 
 namespace fs = std::filesystem;
-
-bool path_is_inside(const fs::path& path, const fs::path& root) {
-  // error_code overloads: a name that is no valid path (too long, ...) is not inside, not an exception.
-  std::error_code ec_p, ec_r;
-  auto p = fs::weakly_canonical(path, ec_p), r = fs::weakly_canonical(root, ec_r);
-  if (ec_p || ec_r) return false;
-  auto mismatch = std::mismatch(r.begin(), r.end(), p.begin(), p.end());
-  return mismatch.first == r.end();
-}
 
 // Everything a job needs before its first frame: the loaded scene with the
 // job's overrides applied, the frame list, and what animates.
@@ -82,7 +74,7 @@ Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions
   if (job.scene.empty()) return invalid_argument("job.scene: no scene given");
   fs::path p(job.scene);
   if (p.is_relative()) p = fs::path(!options.asset_root.empty() ? options.asset_root : options.base_dir) / p;
-  if (!options.asset_root.empty() && !path_is_inside(p, options.asset_root))
+  if (!options.asset_root.empty() && !is_inside_root(p, options.asset_root))
     return invalid_argument("job.scene: '" + job.scene + "' lies outside the asset root");
   std::error_code ec;
   if (!fs::exists(p, ec)) return not_found("job.scene: '" + job.scene + "' does not exist");

@@ -23,6 +23,7 @@
 
 #include "core/scene/gltf_animation.h"
 #include "core/scene/mesh_repair.h"
+#include "core/util/path_confinement.h"
 
 namespace gdvr {
 
@@ -50,28 +51,19 @@ struct FsContext {
   std::string asset_root;
 };
 
-bool path_is_inside(const fs::path& path, const fs::path& root) {
-  // error_code overloads: a URI that is no valid path (too long, ...) is simply not inside.
-  std::error_code ec_p, ec_r;
-  auto p = fs::weakly_canonical(path, ec_p), r = fs::weakly_canonical(root, ec_r);
-  if (ec_p || ec_r) return false;
-  auto mismatch = std::mismatch(r.begin(), r.end(), p.begin(), p.end());
-  return mismatch.first == r.end();
-}
-
 // No '~' or environment expansion: a file in a scene names a file, nothing more.
 std::string expand_nothing(const std::string& path, void*) { return path; }
 
 bool file_exists(const std::string& path, void* user) {
   const auto* ctx = static_cast<const FsContext*>(user);
-  if (!ctx->asset_root.empty() && !path_is_inside(path, ctx->asset_root)) return false;
+  if (!ctx->asset_root.empty() && !is_inside_root(path, ctx->asset_root)) return false;
   std::error_code ec;
   return fs::is_regular_file(path, ec);
 }
 
 bool read_whole_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
   const auto* ctx = static_cast<const FsContext*>(user);
-  if (!ctx->asset_root.empty() && !path_is_inside(path, ctx->asset_root)) {
+  if (!ctx->asset_root.empty() && !is_inside_root(path, ctx->asset_root)) {
     if (err) *err += "'" + path + "' lies outside the asset root\n";
     return false;
   }
@@ -843,7 +835,7 @@ Expected<LoadedScene> load_gltf_scene(const std::string& path, const LoadOptions
     return invalid_argument(path + ": scene parameters (params / -D) apply to Mitsuba XML scenes only");
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) return not_found(path + ": no such file");
-  if (!options.asset_root.empty() && !path_is_inside(path, options.asset_root))
+  if (!options.asset_root.empty() && !is_inside_root(path, options.asset_root))
     return invalid_argument(path + ": lies outside the asset root");
 
   // .glb by content, not extension: a binary file named .gltf still loads.

@@ -18,6 +18,7 @@
 #include "core/scene/ply_reader.h"
 #include "core/scene/serialized_reader.h"
 #include "core/scene/shape_tessellation.h"
+#include "core/util/path_confinement.h"
 
 namespace gdvr {
 
@@ -730,13 +731,8 @@ Expected<Scene> load_impl(const std::string& path, const std::string* text, cons
 Expected<Scene> load_mitsuba_scene(const std::string& path, const LoadOptions& options) {
   std::error_code ec;
   // The root check comes first so that a request cannot probe for files outside it.
-  if (!options.asset_root.empty()) {
-    fs::path root = fs::weakly_canonical(options.asset_root, ec);
-    fs::path p = fs::weakly_canonical(path, ec);
-    auto mismatch = std::mismatch(root.begin(), root.end(), p.begin(), p.end());
-    bool inside = mismatch.first == root.end() || (std::next(mismatch.first) == root.end() && mismatch.first->empty());
-    if (!inside) return invalid_argument(path + ": scene file is outside the asset root " + root.string());
-  }
+  if (!options.asset_root.empty() && !is_inside_root(path, options.asset_root))
+    return invalid_argument(path + ": scene file is outside the asset root " + options.asset_root);
   if (!fs::is_regular_file(path, ec)) return Status(StatusCode::kNotFound, path + ": scene file not found");
   return load_impl(path, nullptr, fs::path(path).parent_path().string(), options);
 }

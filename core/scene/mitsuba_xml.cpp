@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/util/path_confinement.h"
+
 namespace gdvr {
 
 namespace fs = std::filesystem;
@@ -39,15 +41,6 @@ class LineIndex {
  private:
   std::vector<size_t> starts_;
 };
-
-bool is_within(const fs::path& p, const fs::path& root) {
-  auto r = root.begin(), q = p.begin();
-  for (; r != root.end(); ++r, ++q) {
-    if (r->empty()) continue;  // trailing separator of "dir/"
-    if (q == p.end() || *q != *r) return false;
-  }
-  return true;
-}
 
 class XmlReader {
  public:
@@ -248,7 +241,7 @@ Expected<std::string> resolve_scene_file(const std::string& filename, const XmlE
     fs::path canon = fs::weakly_canonical(c, ec);
     if (ec) canon = c.lexically_normal();
     // Check the root before existence, so that a scene cannot probe for files outside it.
-    if (!root.empty() && !is_within(canon, root))
+    if (!root.empty() && !is_inside_root(canon, root))
       return invalid_argument(where.where() + ": '" + filename + "' resolves to " + canon.string() +
                               ", outside the asset root " + root.string());
     if (fs::is_regular_file(canon, ec)) return c.lexically_normal().string();
