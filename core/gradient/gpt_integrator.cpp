@@ -34,16 +34,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   while (true) {
     const int first = spp_done, count = settings.spp;
     const double pass_start = elapsed();
-    TileRunOptions opts;
-    opts.threads = settings.threads;
-    opts.tile_size = settings.tile_size;
-    opts.cancel = control.cancel;
-    if (control.on_progress) {
-      opts.on_progress = [&](double f) {
-        control.on_progress(timed ? std::min(1.0, elapsed() / settings.time_budget_s) : f);
-      };
-    }
-    Status st = run_tiles(w, h, opts, [&](const Tile& tile) {
+    Status st = run_tiles(w, h, pass_tile_options(settings, control, start), [&](const Tile& tile) {
       GradientTracer tracer(scene, camera, w, h, settings.path, gpt, settings.seed, frame);
       tracer.set_temporal_target(temporal);
       GradientSample gs;

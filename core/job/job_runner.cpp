@@ -543,6 +543,33 @@ Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::m
   return out;
 }
 
+Expected<std::unique_ptr<JobFinalizer>> JobFinalizer::create(const JobSpec& job) {
+  std::unique_ptr<JobFinalizer> f(new JobFinalizer());
+  f->job_ = job;
+  if (job.integrator == "tgpt") {
+    auto frames = parse_frame_range(job.frames);
+    if (!frames.ok()) return frames.status().with_context("job.frames: ");
+    auto settings = tgpt_settings_for(job);
+    if (!settings.ok()) return settings.status();
+    f->frames_ = std::move(frames.value());
+    f->windows_ = std::make_unique<TemporalWindowCache>(settings.value(), int(f->frames_.size()));
+  }
+  return f;
+}
+
+JobFinalizer::~JobFinalizer() = default;
+
+Expected<FrameOutput> JobFinalizer::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {
+  if (!windows_) return finalize_frame(job_, frame, buffers);
+  auto out = finalize_tgpt_frame(job_, frame, buffers, frames_, windows_.get());
+  // As the in-process run: windows that end at or before this frame are done
+  // with while frames come in order.
+  if (out.ok()) windows_->release_before(frame_position(frames_, frame) + 1);
+  return out;
+}
+
+int JobFinalizer::windows_solved() const { return windows_ ? windows_->windows_solved() : 0; }
+
 Status render_job_buffers(const JobSpec& job, const JobRunOptions& options, const std::vector<int>& frames,
                           const std::function<Status(FrameBuffers&&)>& on_buffers,
                           const std::function<void(const JobProgress&)>& on_progress,

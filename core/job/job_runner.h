@@ -7,6 +7,7 @@
 #include <atomic>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -91,5 +92,34 @@ std::vector<int> frames_needed_to_finalize(const JobSpec& job, const std::vector
 
 // Stage 2 for one frame. `buffers` must hold frames_needed_to_finalize(frame).
 Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::map<int, FrameBuffers>& buffers);
+
+class TemporalWindowCache;
+
+// Stage 2 for several frames of one job in one process (a farm's finalize
+// task): each output is finalize_frame's, bit for bit, but what neighbouring
+// frames share is kept between calls. A T-GPT frame is the blend of the
+// windows containing it, and finalize_frame solves them all for its one
+// frame, so a shot finalized frame by frame solves each window once for every
+// frame it holds (W times); a finalizer solves each once, as the in-process
+// run does, when its frames come in increasing order (and again, still
+// correctly, when an earlier frame comes after its windows were let go).
+class JobFinalizer {
+ public:
+  static Expected<std::unique_ptr<JobFinalizer>> create(const JobSpec& job);
+  ~JobFinalizer();
+  JobFinalizer(const JobFinalizer&) = delete;
+  JobFinalizer& operator=(const JobFinalizer&) = delete;
+
+  // `buffers` must hold frames_needed_to_finalize(frame).
+  Expected<FrameOutput> finalize(int frame, const std::map<int, FrameBuffers>& buffers);
+  // Reconstruction windows solved so far (0 for pt and gpt, which have none).
+  int windows_solved() const;
+
+ private:
+  JobFinalizer() = default;
+  JobSpec job_;
+  std::vector<int> frames_;                        // the job's frames (tgpt)
+  std::unique_ptr<TemporalWindowCache> windows_;  // tgpt only
+};
 
 }  // namespace gdvr

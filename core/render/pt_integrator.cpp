@@ -26,6 +26,22 @@ Expected<DirectEmissionResult> render_frame_direct(const FrameScene& scene, cons
                                 kDirectEmissionStream, settings.path, settings.threads, control.cancel);
 }
 
+TileRunOptions pass_tile_options(const FrameRenderSettings& settings, const FrameRenderControl& control,
+                                 std::chrono::steady_clock::time_point frame_start) {
+  TileRunOptions opts;
+  opts.threads = settings.threads;
+  opts.tile_size = settings.tile_size;
+  opts.cancel = control.cancel;
+  if (control.on_progress) {
+    const double budget = settings.time_budget_s;
+    opts.on_progress = [budget, frame_start, report = control.on_progress](double f) {
+      const double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - frame_start).count();
+      report(budget > 0 ? std::min(1.0, spent / budget) : f);
+    };
+  }
+  return opts;
+}
+
 Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const FrameRenderSettings& settings,
                                             uint32_t frame, const FrameRenderControl& control) {
   const int w = settings.width, h = settings.height;
@@ -59,17 +75,7 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
   while (true) {
     const int first = spp_done, count = settings.spp;
     const double pass_start = elapsed();
-    TileRunOptions opts;
-    opts.threads = settings.threads;
-    opts.tile_size = settings.tile_size;
-    opts.cancel = control.cancel;
-    if (control.on_progress) {
-      opts.on_progress = [&](double f) {
-        double overall = timed ? std::min(1.0, (elapsed()) / settings.time_budget_s) : f;
-        control.on_progress(overall);
-      };
-    }
-    Status st = run_tiles(w, h, opts, [&](const Tile& tile) {
+    Status st = run_tiles(w, h, pass_tile_options(settings, control, start), [&](const Tile& tile) {
       PathCounters counters;
       trace_tile_samples(scene, path, camera, settings.seed, frame, tile, first, count, settings.paths_in_flight,
                          counters,

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <functional>
 
 #include "core/image/image.h"
@@ -10,6 +11,7 @@
 #include "core/render/direct_emission.h"
 #include "core/render/path_batch.h"
 #include "core/render/path_tracer.h"
+#include "core/render/tile_scheduler.h"
 
 namespace gdvr {
 
@@ -47,6 +49,12 @@ struct FrameRenderControl {
 // Every integrator runs it before its paths, so a time budget includes it.
 Expected<DirectEmissionResult> render_frame_direct(const FrameScene& scene, const FrameRenderSettings& settings,
                                                    const FrameRenderControl& control);
+
+// The tile options of one pass of an integrator's frame: the settings' threads
+// and tile size, the control's cancel flag, and progress as the fraction of
+// the pass (spp mode) or of the time budget spent since `frame_start`.
+TileRunOptions pass_tile_options(const FrameRenderSettings& settings, const FrameRenderControl& control,
+                                 std::chrono::steady_clock::time_point frame_start);
 
 Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const FrameRenderSettings& settings,
                                             uint32_t frame, const FrameRenderControl& control);

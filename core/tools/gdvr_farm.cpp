@@ -508,6 +508,10 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
   for (int f : frames)
     for (int n : frames_needed_to_finalize(job.spec, job.frames, f)) last_use[n] = f;
 
+  // One finalizer for the task: a T-GPT window is solved once for all of the
+  // task's frames it holds, not once per frame.
+  auto finalizer = JobFinalizer::create(job.spec);
+  if (!finalizer.ok()) return fail(finalizer.status());
   int finalized = 0, skipped = 0;
   for (int f : frames) {
     if (g_cancel) return fail(cancelled("cancelled"));
@@ -526,7 +530,7 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
                       fb.status().to_string());
         loaded[n] = std::move(fb.value());
       }
-      auto out = finalize_frame(job.spec, f, loaded);
+      auto out = finalizer.value()->finalize(f, loaded);
       if (!out.ok()) return fail(out.status());
       Status st = write_exr_shared(exr_path, out->image);
       if (!st.ok()) return fail(st);

@@ -267,6 +267,22 @@ TEST_P(TgptJobTest, StreamsInOrderAndStagesAgree) {
     partial.erase(partial.rbegin()->first);
     EXPECT_FALSE(finalize_frame(job, f, partial).ok());
   }
+  // A farm task's finalizer gives the same images and solves each window once
+  // (7 frames, W = 4, H = 2: windows [0,4) [2,6) [4,7)); frame by frame solves
+  // each window once for every frame it holds.
+  auto finalizer = JobFinalizer::create(job);
+  ASSERT_TRUE(finalizer.ok()) << finalizer.status().to_string();
+  for (int f : all) {
+    auto fin = finalizer.value()->finalize(f, buffers);
+    ASSERT_TRUE(fin.ok()) << fin.status().to_string();
+    ASSERT_EQ(fin->image.find("")->image.data(), out[size_t(f)].image.find("")->image.data()) << "frame " << f;
+  }
+  EXPECT_EQ(finalizer.value()->windows_solved(), 3);
+  // Out of order, a window let go is solved again, and the images stay the same.
+  auto again = finalizer.value()->finalize(1, buffers);
+  ASSERT_TRUE(again.ok()) << again.status().to_string();
+  EXPECT_EQ(again->image.find("")->image.data(), out[1].image.find("")->image.data());
+  EXPECT_EQ(finalizer.value()->windows_solved(), 4);
   // Moving pairs carry motion fields and count temporal failures somewhere.
   EXPECT_NE(buffers[0].layers.find("motion"), nullptr);
   EXPECT_NE(buffers[1].layers.find("motion_back"), nullptr);
