@@ -67,7 +67,7 @@ Status check_dimensions(const std::string& path, int64_t width, int64_t height) 
 // given a pool: with a thread per core, the farm's finalize (zlib 61 % of its
 // cycles) ran 1.4x faster, files byte-identical (docs/tgpt.md). Process-wide,
 // but OpenEXR is only used through this file.
-void limit_openexr_sizes() {
+void configure_openexr() {
   static std::once_flag once;
   std::call_once(once, [] {
     Imf::Header::setMaxImageSize(int(kMaxDimension), int(kMaxDimension));
@@ -264,7 +264,7 @@ Status validate_layers(const std::string& path, const LayeredImage& image) {
 Expected<Image> read_rgb_image(const std::string& path, bool raw) {
   if (!file_exists(path)) return not_found(path + ": no such file or not readable");
   if (!has_exr_magic(path)) return read_stb_rgb(path, raw);
-  limit_openexr_sizes();
+  configure_openexr();
   try {
     return read_exr_rgb(path);
   } catch (const std::exception& e) {
@@ -277,7 +277,7 @@ Status write_exr(const std::string& path, const LayeredImage& image, bool half_f
   const int width = image.layers.front().image.width();
   const int height = image.layers.front().image.height();
   const std::string tmp = temporary_path_for(path);
-  limit_openexr_sizes();
+  configure_openexr();
   try {
     Imf::Header header(width, height);
     header.compression() = Imf::ZIP_COMPRESSION;
@@ -324,7 +324,7 @@ Status write_exr(const std::string& path, const LayeredImage& image, bool half_f
 
 Expected<LayeredImage> read_exr(const std::string& path) {
   if (!file_exists(path)) return not_found(path + ": no such file or not readable");
-  limit_openexr_sizes();
+  configure_openexr();
   try {
     Imf::MultiPartInputFile file(path.c_str());
     LayeredImage result;
