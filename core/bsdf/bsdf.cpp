@@ -107,6 +107,18 @@ Rgb bsdf_eval(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi) { return bsdf_eval
 
 float bsdf_pdf(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi) { return bsdf_eval_pdf(bsdf, uv, wo, wi).pdf; }
 
+namespace {
+
+// Never hand NaN/Inf to the integrator: a degenerate sample ends the path.
+bool accept_sample(bool ok, bool mirrored, BsdfSample s, BsdfSample* out) {
+  if (!ok || !is_finite(s.weight) || !std::isfinite(s.pdf) || !is_finite(s.wi) || !(s.pdf > 0.0f)) return false;
+  if (mirrored) s.wi.z = -s.wi.z;
+  *out = s;
+  return true;
+}
+
+}  // namespace
+
 bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir, BsdfSample* out) {
   bool mirrored = mirror_to_front(bsdf, &wo, nullptr);
   BsdfSample s;
@@ -121,11 +133,20 @@ bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir
     case BsdfType::kRoughDielectric: ok = lobes::rough_dielectric_sample(bsdf, uv, wo, u_lobe, u_dir, &s); break;
     case BsdfType::kThinDielectric: ok = lobes::thin_dielectric_sample(bsdf, uv, wo, u_lobe, u_dir, &s); break;
   }
-  // Never hand NaN/Inf to the integrator: a degenerate sample ends the path.
-  if (!ok || !is_finite(s.weight) || !std::isfinite(s.pdf) || !is_finite(s.wi) || !(s.pdf > 0.0f)) return false;
-  if (mirrored) s.wi.z = -s.wi.z;
-  *out = s;
-  return true;
+  return accept_sample(ok, mirrored, s, out);
+}
+
+bool bsdf_start_slope_inversion(const Bsdf& bsdf, Vec3f wo, Vec2f u_dir, BeckmannSlopeInversion* inv) {
+  if (bsdf.type != BsdfType::kRoughConductor) return false;
+  mirror_to_front(bsdf, &wo, nullptr);
+  return lobes::rough_conductor_start_slope_inversion(bsdf, wo, u_dir, inv);
+}
+
+bool bsdf_sample_from_slope(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec2f slope11, BsdfSample* out) {
+  bool mirrored = mirror_to_front(bsdf, &wo, nullptr);
+  BsdfSample s;
+  bool ok = lobes::rough_conductor_sample_from_slope(bsdf, uv, wo, slope11, &s);
+  return accept_sample(ok, mirrored, s, out);
 }
 
 }  // namespace gdvr

@@ -15,6 +15,9 @@ bool diffuse_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, Bs
 bool conductor_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, BsdfSample* s);
 BsdfEval rough_conductor_eval_pdf(const Bsdf& b, Vec2f uv, Vec3f wo, Vec3f wi);
 bool rough_conductor_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, BsdfSample* s);
+// rough_conductor_sample split at its Beckmann slope inversion (bsdf.h).
+bool rough_conductor_start_slope_inversion(const Bsdf& b, Vec3f wo, Vec2f u, BeckmannSlopeInversion* inv);
+bool rough_conductor_sample_from_slope(const Bsdf& b, Vec2f uv, Vec3f wo, Vec2f slope11, BsdfSample* s);
 
 BsdfEval plastic_eval_pdf(const Bsdf& b, Vec2f uv, Vec3f wo, Vec3f wi);
 bool plastic_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, BsdfSample* s);

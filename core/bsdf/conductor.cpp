@@ -2,6 +2,7 @@
 // roughconductor.cpp): Fresnel for a complex IOR per RGB channel, times
 // specular_reflectance; the rough one is the Torrance-Sparrow microfacet model
 // f = F D G / (4 cos_o cos_i) with Smith G (Walter et al. 2007).
+#include "core/bsdf/beckmann_slope.h"
 #include "core/bsdf/bsdf_lobes.h"
 #include "core/bsdf/fresnel.h"
 #include "core/bsdf/microfacet.h"
@@ -43,10 +44,11 @@ BsdfEval rough_conductor_eval_pdf(const Bsdf& b, Vec2f uv, Vec3f wo, Vec3f wi) {
   return r;
 }
 
-bool rough_conductor_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float /*u_lobe*/, Vec2f u, BsdfSample* s) {
-  if (wo.z <= 0.0f) return false;
-  MicrofacetDistribution distr = distribution(b);
-  auto [m, pdf_m] = distr.sample(wo, u);
+namespace {
+
+// rough_conductor_sample from the sampled microfacet normal m and its pdf.
+bool reflect_on_microfacet(const Bsdf& b, const MicrofacetDistribution& distr, Vec2f uv, Vec3f wo, Vec3f m,
+                           float pdf_m, BsdfSample* s) {
   Vec3f wi = reflect(wo, m);
   float wi_dot_m = dot(wi, m);
   if (!(pdf_m > 0.0f) || wi.z <= 0.0f || !(wi_dot_m > 0.0f)) return false;
@@ -58,6 +60,28 @@ bool rough_conductor_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float /*u_lobe*/,
   s->lobe = kLobeGlossyReflection;
   s->weight = fresnel_conductor(dot(wo, m), b.eta, b.k) * b.specular_reflectance.eval(uv) * weight;
   return s->pdf > 0.0f;
+}
+
+}  // namespace
+
+bool rough_conductor_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float /*u_lobe*/, Vec2f u, BsdfSample* s) {
+  if (wo.z <= 0.0f) return false;
+  MicrofacetDistribution distr = distribution(b);
+  auto [m, pdf_m] = distr.sample(wo, u);
+  return reflect_on_microfacet(b, distr, uv, wo, m, pdf_m, s);
+}
+
+bool rough_conductor_start_slope_inversion(const Bsdf& b, Vec3f wo, Vec2f u, BeckmannSlopeInversion* inv) {
+  MicrofacetDistribution distr = distribution(b);
+  if (wo.z <= 0.0f || !distr.samples_beckmann_slopes()) return false;
+  *inv = BeckmannSlopeInversion(distr.stretched_cos_theta(wo), u);
+  return true;
+}
+
+bool rough_conductor_sample_from_slope(const Bsdf& b, Vec2f uv, Vec3f wo, Vec2f slope11, BsdfSample* s) {
+  MicrofacetDistribution distr = distribution(b);
+  auto [m, pdf_m] = distr.sample_from_slope(wo, slope11);
+  return reflect_on_microfacet(b, distr, uv, wo, m, pdf_m, s);
 }
 
 }  // namespace gdvr::lobes

@@ -3,12 +3,11 @@
 #include <cmath>
 #include <vector>
 
+#include "core/bsdf/beckmann_slope.h"
 #include "core/bsdf/fresnel.h"
 
 namespace gdvr {
 namespace {
-
-constexpr float kInvSqrtPi = 0.56418958354775628695f;
 
 // (sin phi, cos phi) of a direction, (0, 1) at the pole as Mitsuba's Frame3f.
 std::pair<float, float> sincos_phi(Vec3f v) {
@@ -138,24 +137,7 @@ float MicrofacetDistribution::smith_g1(Vec3f v, Vec3f m) const {
 }
 
 Vec2f MicrofacetDistribution::sample_visible_11(float cos_theta_i, Vec2f u) const {
-  if (type == MicrofacetType::kBeckmann) {
-    // Jakob 2014, "An improved visible normal sampling routine for the Beckmann
-    // distribution": Newton inversion of the slope CDF in the erf() domain.
-    float tan_theta_i = safe_sqrt(1.0f - cos_theta_i * cos_theta_i) / cos_theta_i;
-    float cot_theta_i = 1.0f / tan_theta_i;
-    float maxval = std::erf(cot_theta_i);
-    u.x = std::clamp(u.x, 1e-6f, 1.0f - 1e-6f);
-    u.y = std::clamp(u.y, 1e-6f, 1.0f - 1e-6f);
-    float x = maxval - (maxval + 1.0f) * std::erf(std::sqrt(-std::log(u.x)));
-    u.x *= 1.0f + maxval + kInvSqrtPi * tan_theta_i * std::exp(-sqr(cot_theta_i));
-    for (int i = 0; i < 3; ++i) {
-      float slope = erfinv(x);
-      float value = 1.0f + x + kInvSqrtPi * tan_theta_i * std::exp(-sqr(slope)) - u.x;
-      float derivative = 1.0f - slope * tan_theta_i;
-      x -= value / derivative;
-    }
-    return {erfinv(x), erfinv(2.0f * u.y - 1.0f)};
-  }
+  if (type == MicrofacetType::kBeckmann) return BeckmannSlopeInversion::solve(cos_theta_i, u);
   // Heitz 2018, "Sampling the GGX distribution of visible normals" in slope form.
   Vec2f p = square_to_uniform_disk_concentric(u);
   float s = 0.5f * (1.0f + cos_theta_i);
@@ -197,9 +179,12 @@ std::pair<Vec3f, float> MicrofacetDistribution::sample(Vec3f wi, Vec2f u) const 
     return {Vec3f(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta), pdf};
   }
   // Visible normals: stretch, sample the alpha = 1 slopes, rotate, unstretch.
-  Vec3f wi_p = normalize(Vec3f(alpha_u * wi.x, alpha_v * wi.y, wi.z));
+  const Vec3f wi_p = stretch(wi);
+  return visible_normal_from_slope(wi, wi_p, sample_visible_11(wi_p.z, u));
+}
+
+std::pair<Vec3f, float> MicrofacetDistribution::visible_normal_from_slope(Vec3f wi, Vec3f wi_p, Vec2f slope) const {
   auto [sin_phi, cos_phi] = sincos_phi(wi_p);
-  Vec2f slope = sample_visible_11(wi_p.z, u);
   slope = Vec2f((cos_phi * slope.x - sin_phi * slope.y) * alpha_u,
                 (sin_phi * slope.x + cos_phi * slope.y) * alpha_v);
   Vec3f m = normalize(Vec3f(-slope.x, -slope.y, 1.0f));

@@ -11,6 +11,7 @@ namespace gdvr {
 
 constexpr float kPi = 3.14159265358979323846f;
 constexpr float kInvPi = 0.31830988618379067154f;
+constexpr float kInvSqrtPi = 0.56418958354775628695f;
 constexpr float kInvTwoPi = 0.15915494309189533577f;
 constexpr float kInvFourPi = 0.07957747154594766788f;
 

@@ -52,6 +52,8 @@ struct PathState {
   bool continues = true;  // false once the path has no next ray
 
   EmitterSample emitter;  // next-event estimation's sample at si
+  float u_lobe = 0;       // BSDF sampling's numbers (draw_bsdf_numbers)
+  Vec2f u_dir;
 
   // Next-event estimation waiting for its shadow ray.
   bool shadow_pending = false;
@@ -147,15 +149,24 @@ inline void connect_emitter(PathState* st) {
   st->shadow_pending = true;
 }
 
-// BSDF sampling, the next ray and Russian roulette. Sets st->continues.
-inline void sample_bsdf(const PathTracerSettings& settings, PathState* st) {
+// BSDF sampling's two numbers, the first the stage draws.
+inline void draw_bsdf_numbers(PathState* st) {
+  st->u_lobe = st->sampler.next_1d();
+  st->u_dir = st->sampler.next_2d();
+}
+
+// BSDF sampling from the numbers drawn, the next ray and Russian roulette.
+// Sets st->continues. `slope11`: where bsdf_start_slope_inversion started an
+// inversion for this sample, its slope (a batch runs them side by side:
+// path_batch.cpp), else null.
+inline void sample_bsdf_drawn(const PathTracerSettings& settings, PathState* st, const Vec2f* slope11) {
   const SurfaceInteraction& si = st->si;
   st->continues = false;
-  float u_lobe = st->sampler.next_1d();
-  Vec2f u_dir = st->sampler.next_2d();
   BsdfSample bs;
   // bsdf_sample() returns only finite weights, pdfs and directions.
-  if (!bsdf_sample(*st->bsdf, si.uv, si.wi, u_lobe, u_dir, &bs) || bs.weight.is_black()) return;
+  const bool sampled = slope11 ? bsdf_sample_from_slope(*st->bsdf, si.uv, si.wi, *slope11, &bs)
+                               : bsdf_sample(*st->bsdf, si.uv, si.wi, st->u_lobe, st->u_dir, &bs);
+  if (!sampled || bs.weight.is_black()) return;
   st->throughput *= bs.weight;
   st->eta *= bs.eta;
   Vec3f d = si.sh_frame.to_world(bs.wi);
@@ -174,6 +185,12 @@ inline void sample_bsdf(const PathTracerSettings& settings, PathState* st) {
   }
   ++st->depth;
   st->continues = true;
+}
+
+// BSDF sampling, the next ray and Russian roulette. Sets st->continues.
+inline void sample_bsdf(const PathTracerSettings& settings, PathState* st) {
+  draw_bsdf_numbers(st);
+  sample_bsdf_drawn(settings, st, nullptr);
 }
 
 // The answer to st->shadow.
