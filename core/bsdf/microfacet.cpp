@@ -88,7 +88,7 @@ float MicrofacetDistribution::eval(Vec3f m) const {
   if (cos_theta_2 <= 0.0f) return 0.0f;
   float result;
   if (type == MicrofacetType::kBeckmann) {
-    result = std::exp(-(sqr(m.x / alpha_u) + sqr(m.y / alpha_v)) / cos_theta_2) /
+    result = exp_or_zero(-(sqr(m.x / alpha_u) + sqr(m.y / alpha_v)) / cos_theta_2) /
              (kPi * alpha_uv * sqr(cos_theta_2));
   } else {
     result = 1.0f / (kPi * alpha_uv * sqr(sqr(m.x / alpha_u) + sqr(m.y / alpha_v) + sqr(m.z)));
