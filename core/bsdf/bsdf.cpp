@@ -136,16 +136,28 @@ bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir
   return accept_sample(ok, mirrored, s, out);
 }
 
-bool bsdf_start_slope_inversion(const Bsdf& bsdf, Vec3f wo, Vec2f u_dir, BeckmannSlopeInversion* inv) {
-  if (bsdf.type != BsdfType::kRoughConductor) return false;
+bool bsdf_start_slope_inversion(const Bsdf& bsdf, Vec3f wo, float u_lobe, Vec2f u_dir, BeckmannSlopeInversion* inv) {
   mirror_to_front(bsdf, &wo, nullptr);
-  return lobes::rough_conductor_start_slope_inversion(bsdf, wo, u_dir, inv);
+  switch (bsdf.type) {
+    case BsdfType::kRoughConductor: return lobes::rough_conductor_start_slope_inversion(bsdf, wo, u_dir, inv);
+    case BsdfType::kRoughPlastic: return lobes::rough_plastic_start_slope_inversion(bsdf, wo, u_lobe, u_dir, inv);
+    case BsdfType::kRoughDielectric: return lobes::rough_dielectric_start_slope_inversion(bsdf, wo, u_dir, inv);
+    default: return false;
+  }
 }
 
-bool bsdf_sample_from_slope(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec2f slope11, BsdfSample* out) {
+bool bsdf_sample_from_slope(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f slope11, BsdfSample* out) {
   bool mirrored = mirror_to_front(bsdf, &wo, nullptr);
   BsdfSample s;
-  bool ok = lobes::rough_conductor_sample_from_slope(bsdf, uv, wo, slope11, &s);
+  bool ok = false;
+  switch (bsdf.type) {
+    case BsdfType::kRoughConductor: ok = lobes::rough_conductor_sample_from_slope(bsdf, uv, wo, slope11, &s); break;
+    case BsdfType::kRoughPlastic: ok = lobes::rough_plastic_sample_from_slope(bsdf, uv, wo, slope11, &s); break;
+    case BsdfType::kRoughDielectric:
+      ok = lobes::rough_dielectric_sample_from_slope(bsdf, uv, wo, u_lobe, slope11, &s);
+      break;
+    default: return false;  // no inversion was started for it
+  }
   return accept_sample(ok, mirrored, s, out);
 }
 

@@ -111,11 +111,12 @@ bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir
 // bsdf_sample split at a Beckmann visible-slope inversion (beckmann_slope.h),
 // for a batch of paths that runs its inversions side by side
 // (path_batch.cpp). Where bsdf_sample would draw its microfacet normal by
-// such an inversion (a rough conductor seen from a side it reflects on),
-// starts it in *inv and returns true; then bsdf_sample_from_slope with
-// inv->slope() after its Newton steps returns what bsdf_sample returns, bit
-// for bit. Other BSDFs return false: call bsdf_sample.
-bool bsdf_start_slope_inversion(const Bsdf& bsdf, Vec3f wo, Vec2f u_dir, BeckmannSlopeInversion* inv);
-bool bsdf_sample_from_slope(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec2f slope11, BsdfSample* out);
+// such an inversion (the rough conductor, plastic and dielectric with
+// Beckmann visible-normal sampling, where the sample reaches the microfacet
+// lobe), starts it in *inv and returns true; then bsdf_sample_from_slope with
+// the same numbers and inv->slope() after its Newton steps returns what
+// bsdf_sample returns, bit for bit. Otherwise returns false: call bsdf_sample.
+bool bsdf_start_slope_inversion(const Bsdf& bsdf, Vec3f wo, float u_lobe, Vec2f u_dir, BeckmannSlopeInversion* inv);
+bool bsdf_sample_from_slope(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f slope11, BsdfSample* out);
 
 }  // namespace gdvr

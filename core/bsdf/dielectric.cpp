@@ -2,6 +2,7 @@
 // roughdielectric.cpp, thindielectric.cpp). Radiance transport: refraction
 // scales by eta_ti^2 (solid-angle compression, Veach 1997 sec. 5.2); the rough
 // model is Walter et al. 2007 with Mitsuba's half-vector conventions.
+#include "core/bsdf/beckmann_slope.h"
 #include "core/bsdf/bsdf_lobes.h"
 #include "core/bsdf/fresnel.h"
 #include "core/bsdf/microfacet.h"
@@ -86,11 +87,12 @@ BsdfEval rough_dielectric_eval_pdf(const Bsdf& b, Vec2f uv, Vec3f wo, Vec3f wi) 
   return r;
 }
 
-bool rough_dielectric_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, BsdfSample* s) {
-  float cos_o = wo.z;
-  if (cos_o == 0.0f) return false;
+namespace {
+
+// rough_dielectric_sample from the sampled microfacet normal m and its pdf.
+bool scatter_on_microfacet(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec3f m, float pdf_m, BsdfSample* s) {
+  const float cos_o = wo.z;
   MicrofacetDistribution distr = distribution(b);
-  auto [m, pdf_m] = sampling_distribution(b, cos_o).sample(mulsign(wo, cos_o), u);
   if (!(pdf_m > 0.0f)) return false;
   FresnelResult fr = fresnel_dielectric(dot(wo, m), relative_eta(b));
   bool selected_r = u_lobe <= fr.f;
@@ -122,6 +124,30 @@ bool rough_dielectric_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Ve
   s->weight = weight * g_weight;
   s->pdf = pdf * std::abs(dwh_dwi);
   return s->pdf > 0.0f && std::isfinite(s->pdf) && g_weight > 0.0f;
+}
+
+}  // namespace
+
+bool rough_dielectric_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, BsdfSample* s) {
+  const float cos_o = wo.z;
+  if (cos_o == 0.0f) return false;
+  auto [m, pdf_m] = sampling_distribution(b, cos_o).sample(mulsign(wo, cos_o), u);
+  return scatter_on_microfacet(b, uv, wo, u_lobe, m, pdf_m, s);
+}
+
+bool rough_dielectric_start_slope_inversion(const Bsdf& b, Vec3f wo, Vec2f u, BeckmannSlopeInversion* inv) {
+  const float cos_o = wo.z;
+  const MicrofacetDistribution distr = sampling_distribution(b, cos_o);
+  if (cos_o == 0.0f || !distr.samples_beckmann_slopes()) return false;
+  *inv = BeckmannSlopeInversion(distr.stretched_cos_theta(mulsign(wo, cos_o)), u);
+  return true;
+}
+
+bool rough_dielectric_sample_from_slope(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f slope11,
+                                        BsdfSample* s) {
+  const float cos_o = wo.z;
+  auto [m, pdf_m] = sampling_distribution(b, cos_o).sample_from_slope(mulsign(wo, cos_o), slope11);
+  return scatter_on_microfacet(b, uv, wo, u_lobe, m, pdf_m, s);
 }
 
 // ---- Thin dielectric ----

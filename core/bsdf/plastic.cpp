@@ -9,6 +9,7 @@
 #include <mutex>
 #include <tuple>
 
+#include "core/bsdf/beckmann_slope.h"
 #include "core/bsdf/bsdf_lobes.h"
 #include "core/bsdf/fresnel.h"
 #include "core/bsdf/microfacet.h"
@@ -159,24 +160,45 @@ BsdfEval rough_plastic_eval_pdf(const Bsdf& b, Vec2f uv, Vec3f wo, Vec3f wi) {
   return r;
 }
 
-bool rough_plastic_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, BsdfSample* s) {
-  if (wo.z <= 0.0f) return false;
-  RoughPlasticProbs probs = rough_plastic_probs(b, lerp_table(b, wo.z));
-  if (u_lobe < probs.specular) {
-    Vec3f m = rough_plastic_distribution(b).sample(wo, u).first;
-    s->wi = reflect(wo, m);
-    s->lobe = kLobeGlossyReflection;
-  } else {
-    s->wi = square_to_cosine_hemisphere(u);
-    s->lobe = kLobeDiffuseReflection;
-  }
-  // Mitsuba evaluates the full mixture pdf/value for either lobe (MIS-like).
+namespace {
+
+// rough_plastic_sample once its direction is chosen: Mitsuba evaluates the
+// full mixture pdf/value for either lobe (MIS-like).
+bool finish_rough_plastic_sample(const Bsdf& b, Vec2f uv, Vec3f wo, Vec3f wi, uint32_t lobe, BsdfSample* s) {
+  s->wi = wi;
+  s->lobe = lobe;
   BsdfEval e = rough_plastic_eval_pdf(b, uv, wo, s->wi);
   if (!(e.pdf > 0.0f)) return false;
   s->pdf = e.pdf;
   s->eta = 1.0f;
   s->weight = e.value / e.pdf;
   return true;
+}
+
+bool samples_specular_lobe(const Bsdf& b, Vec3f wo, float u_lobe) {
+  return u_lobe < rough_plastic_probs(b, lerp_table(b, wo.z)).specular;
+}
+
+}  // namespace
+
+bool rough_plastic_sample(const Bsdf& b, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u, BsdfSample* s) {
+  if (wo.z <= 0.0f) return false;
+  if (samples_specular_lobe(b, wo, u_lobe))
+    return finish_rough_plastic_sample(b, uv, wo, reflect(wo, rough_plastic_distribution(b).sample(wo, u).first),
+                                       kLobeGlossyReflection, s);
+  return finish_rough_plastic_sample(b, uv, wo, square_to_cosine_hemisphere(u), kLobeDiffuseReflection, s);
+}
+
+bool rough_plastic_start_slope_inversion(const Bsdf& b, Vec3f wo, float u_lobe, Vec2f u, BeckmannSlopeInversion* inv) {
+  const MicrofacetDistribution distr = rough_plastic_distribution(b);
+  if (wo.z <= 0.0f || !distr.samples_beckmann_slopes() || !samples_specular_lobe(b, wo, u_lobe)) return false;
+  *inv = BeckmannSlopeInversion(distr.stretched_cos_theta(wo), u);
+  return true;
+}
+
+bool rough_plastic_sample_from_slope(const Bsdf& b, Vec2f uv, Vec3f wo, Vec2f slope11, BsdfSample* s) {
+  const Vec3f m = rough_plastic_distribution(b).sample_from_slope(wo, slope11).first;
+  return finish_rough_plastic_sample(b, uv, wo, reflect(wo, m), kLobeGlossyReflection, s);
 }
 
 }  // namespace gdvr::lobes

@@ -18,7 +18,7 @@ inline void sample_bsdf_stage(const PathTracerSettings& settings, PathState* pat
   for (int k = 0; k < n; ++k) {
     PathState& st = paths[which[k]];
     draw_bsdf_numbers(&st);
-    slot[k] = bsdf_start_slope_inversion(*st.bsdf, st.si.wi, st.u_dir, &inversions[m]) ? m++ : -1;
+    slot[k] = bsdf_start_slope_inversion(*st.bsdf, st.si.wi, st.u_lobe, st.u_dir, &inversions[m]) ? m++ : -1;
   }
   for (int step = 0; step < BeckmannSlopeInversion::kNewtonSteps; ++step)
     for (int i = 0; i < m; ++i) inversions[i].newton_step();

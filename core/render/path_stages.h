@@ -164,7 +164,7 @@ inline void sample_bsdf_drawn(const PathTracerSettings& settings, PathState* st,
   st->continues = false;
   BsdfSample bs;
   // bsdf_sample() returns only finite weights, pdfs and directions.
-  const bool sampled = slope11 ? bsdf_sample_from_slope(*st->bsdf, si.uv, si.wi, *slope11, &bs)
+  const bool sampled = slope11 ? bsdf_sample_from_slope(*st->bsdf, si.uv, si.wi, st->u_lobe, *slope11, &bs)
                                : bsdf_sample(*st->bsdf, si.uv, si.wi, st->u_lobe, st->u_dir, &bs);
   if (!sampled || bs.weight.is_black()) return;
   st->throughput *= bs.weight;
