@@ -1,0 +1,578 @@
+// How much would SIMD across paths save on gdvr's own code? A probe for
+// issue 2's performance targets, not part of the renderer
+// (docs/experiments/README.md has the commands and what they measured).
+//
+// One diffuse path vertex of a Cornell box, the only kind of vertex cbox has,
+// with the same arithmetic in the same order as core/: the shading frame,
+// next-event estimation towards a quad light (triangle pick, uniform point,
+// area-to-solid-angle pdf), the diffuse BSDF and the power heuristic, the
+// shadow ray, the cosine-weighted bounce through the concentric disk, Russian
+// roulette, the next ray and seven PCG32 numbers. No ray is traced: this is
+// the code between two Embree calls. It runs in three forms:
+//   - scalar: one path at a time over an array of path structs, as
+//     path_batch.cpp does, calling gdvr's own frame, generator, warps, MIS,
+//     distribution and ray offsets (fused into one loop: the scalar form's
+//     best case);
+//   - simd, struct of arrays: LANES paths at a time, state held as one array
+//     per field (GCC vector extensions; the ISA is what the compiler is told);
+//   - simd, gathered structs: the same vector code on today's path structs,
+//     gathered into vectors and scattered back lane by lane.
+// All three must give the same bits (the probe checks and fails otherwise;
+// -ffp-contract=off keeps GCC from fusing multiply-adds differently in each).
+//
+// From the repository root:
+//   g++ -std=c++17 -O3 -fno-math-errno -ffp-contract=off -Wno-psabi -I. -DLANES=4 -o probe
+//       docs/experiments/simd_vertex_probe.cpp core/math/distribution.cpp core/math/alias_table.cpp
+//   ... -DLANES=8 -march=x86-64-v3      (AVX2)
+//   ... -DLANES=16 -march=x86-64-v4     (AVX-512)
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <type_traits>
+#include <vector>
+
+#include "core/math/distribution.h"
+#include "core/math/frame.h"
+#include "core/math/rng.h"
+#include "core/math/sampling.h"
+#include "core/math/vec.h"
+#include "core/render/ray.h"
+#include "core/render/russian_roulette.h"
+
+namespace {
+
+using gdvr::Rgb;
+using gdvr::Vec2f;
+using gdvr::Vec3f;
+
+constexpr int kPaths = 64;  // paths in flight per thread, as path_batch.h
+#ifndef LANES
+#define LANES 8
+#endif
+constexpr int kLanes = LANES;
+constexpr int kRrDepth = 5;
+
+// ---------------------------------------------------------------- scalar form
+// The quad light: two triangles picked by a Distribution1D, as FrameScene does.
+struct Light {
+  Vec3f p0[2], p1[2], p2[2], n[2];
+  gdvr::Distribution1D triangles{std::vector<float>{1.0f, 1.0f}};
+  float area;  // of the whole quad
+  Rgb radiance;
+};
+
+// What a vertex reads and writes, as PathState holds it (the fields used).
+struct ScalarPath {
+  gdvr::Pcg32 rng;
+  Vec3f p, n, ray_d;
+  Rgb albedo, throughput;
+  int depth;
+  bool alive;
+  // outputs
+  Vec3f shadow_o, shadow_d;
+  Rgb contribution;
+  Vec3f next_o, next_d;
+  float shadow_tmax;
+  bool shadow_pending;
+};
+
+// The vector form reads and writes the generator's two words (state, then
+// the odd increment).
+static_assert(sizeof(gdvr::Pcg32) == 2 * sizeof(uint64_t) && std::is_trivially_copyable_v<gdvr::Pcg32>);
+inline void pcg_words(const gdvr::Pcg32& rng, uint64_t w[2]) { std::memcpy(w, &rng, sizeof rng); }
+inline void set_pcg_words(gdvr::Pcg32* rng, const uint64_t w[2]) {
+  std::memcpy(static_cast<void*>(rng), w, sizeof *rng);
+}
+
+// Steps of FrameScene::sample_emitter_direction (one area emitter),
+// connect_emitter with the diffuse BSDF, sample_bsdf_drawn and Russian roulette.
+void scalar_vertex(const Light& light, ScalarPath* st) {
+  gdvr::SurfaceInteraction si;
+  si.p = st->p;
+  si.n = st->n;
+  si.sh_frame = gdvr::Frame(st->n);
+  si.offset_floor = 1.0f;
+  const Vec3f wo = si.sh_frame.to_local(-st->ray_d);
+  st->shadow_pending = false;
+  if (wo.z <= 0.0f) {  // the diffuse BSDF has nothing from below
+    st->alive = false;
+    return;
+  }
+  // Next-event estimation.
+  const float u_select = st->rng.next_float();
+  const float ux = st->rng.next_float(), uy = st->rng.next_float();
+  (void)u_select;  // one emitter
+  const float select_pdf = 1.0f / 1.0f;
+  float u_tri;
+  const size_t t = light.triangles.sample(ux, &u_tri);
+  const Vec2f b = gdvr::square_to_uniform_triangle({u_tri, uy});
+  const Vec3f lp = light.p0[t] * (1.0f - b.x - b.y) + light.p1[t] * b.x + light.p2[t] * b.y;
+  const Vec3f d = lp - si.p;
+  const float dist2 = gdvr::length_squared(d);
+  const float dist = std::sqrt(dist2);
+  const float abs_dn = std::abs(gdvr::dot(d, light.n[t]));
+  const float pdf_solid_angle = abs_dn > 0 ? dist2 * (dist / (light.area * abs_dn)) : 0.0f;
+  if (dist > 0 && pdf_solid_angle > 0 && std::isfinite(pdf_solid_angle)) {
+    const Vec3f dir = d * (1.0f / dist);
+    const float pdf = pdf_solid_angle * select_pdf;
+    if (gdvr::dot(light.n[t], dir) < 0) {
+      const Rgb weight = light.radiance / pdf;
+      const Vec3f wl = si.sh_frame.to_local(dir);
+      if (wl.z > 0.0f) {
+        const float bsdf_pdf = gdvr::square_to_cosine_hemisphere_pdf(wl);
+        const Rgb f = st->albedo * bsdf_pdf;
+        const float w = gdvr::mis_power(pdf, bsdf_pdf);
+        const gdvr::Ray shadow = si.spawn_ray(dir);
+        st->shadow_o = shadow.o;
+        st->shadow_d = shadow.d;
+        st->shadow_tmax = dist * (1.0f - gdvr::kShadowEpsilon);
+        st->contribution = st->throughput * f * weight * w;
+        st->shadow_pending = true;
+      }
+    }
+  }
+  // The bounce.
+  const float u_lobe = st->rng.next_float();
+  (void)u_lobe;  // one lobe
+  const float vx = st->rng.next_float(), vy = st->rng.next_float();
+  const Vec3f wi = gdvr::square_to_cosine_hemisphere({vx, vy});
+  const float pdf = gdvr::square_to_cosine_hemisphere_pdf(wi);
+  if (!(pdf > 0.0f)) {
+    st->alive = false;
+    return;
+  }
+  st->throughput *= st->albedo;  // f cos / pdf
+  const gdvr::Ray next = si.spawn_ray(si.sh_frame.to_world(wi));
+  // Russian roulette.
+  const float throughput_max = gdvr::max_component(st->throughput);
+  if (st->depth + 1 >= kRrDepth) {
+    const float q = gdvr::russian_roulette_survival(throughput_max, 1.0f);
+    if (st->rng.next_float() >= q) {
+      st->alive = false;
+      return;
+    }
+    st->throughput *= 1.0f / q;
+  }
+  st->next_o = next.o;
+  st->next_d = next.d;
+  st->depth += 1;
+}
+
+// ------------------------------------------------------------------ SIMD form
+// The same steps on kLanes paths at once, branches turned into lane masks.
+typedef float vf __attribute__((vector_size(4 * kLanes)));
+typedef double vd __attribute__((vector_size(8 * kLanes)));
+typedef int32_t vi __attribute__((vector_size(4 * kLanes)));
+typedef int64_t vi64 __attribute__((vector_size(8 * kLanes)));
+typedef uint32_t vu __attribute__((vector_size(4 * kLanes)));
+typedef uint64_t vu64 __attribute__((vector_size(8 * kLanes)));
+
+inline vf splat(float x) { return vf{} + x; }
+inline vf vsqrt(vf x) {
+  vf r;
+  for (int i = 0; i < kLanes; ++i) r[i] = __builtin_sqrtf(x[i]);
+  return r;
+}
+inline vf safe_vsqrt(vf x) { return vsqrt(0.0f < x ? x : splat(0.0f)); }  // std::sqrt(std::max(0.0f, x))
+inline vf vabs(vf x) { return (vf)((vu)x & 0x7fffffffu); }
+inline vf vmax(vf a, vf b) { return a < b ? b : a; }  // std::max(a, b)
+inline vf vmin(vf a, vf b) { return b < a ? b : a; }  // std::min(a, b)
+inline vf vsel(vi m, vf a, vf b) { return m ? a : b; }
+inline vi vsel(vi m, vi a, vi b) { return m ? a : b; }
+
+struct VV3 {
+  vf x, y, z;
+};
+inline VV3 operator+(VV3 a, VV3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline VV3 operator-(VV3 a, VV3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline VV3 operator-(VV3 a) { return {-a.x, -a.y, -a.z}; }
+inline VV3 operator*(VV3 a, vf s) { return {a.x * s, a.y * s, a.z * s}; }
+inline VV3 operator*(VV3 a, VV3 b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
+inline vf vdot(VV3 a, VV3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline VV3 vsel3(vi m, VV3 a, VV3 b) { return {vsel(m, a.x, b.x), vsel(m, a.y, b.y), vsel(m, a.z, b.z)}; }
+inline VV3 splat3(Rgb c) { return {splat(c.r), splat(c.g), splat(c.b)}; }
+// Frame::to_local and to_world, component by component as frame.h writes them.
+inline VV3 to_world(VV3 s, VV3 t, VV3 n, vf x, vf y, vf z) { return s * x + t * y + n * z; }
+
+struct VPcg32 {
+  vu64 state, inc;
+  vu next_u32() {
+    const vu64 old = state;
+    state = old * 6364136223846793005ULL + inc;
+    const vu xorshifted = __builtin_convertvector(((old >> 18u) ^ old) >> 27u, vu);
+    const vu rot = __builtin_convertvector(old >> 59u, vu);
+    return (xorshifted >> rot) | (xorshifted << ((~rot + 1u) & 31u));
+  }
+  // Advances only the lanes in m (paths that draw this number).
+  vf next_float(vi m) {
+    const vu64 before = state;
+    const vf u = __builtin_convertvector((vi)(next_u32() >> 8u), vf) * 0x1p-24f;
+    const vu64 m64 = __builtin_convertvector(m, vu64);  // 0 or all ones (sign-extended)
+    state = (state & m64) | (before & ~m64);
+    return u;
+  }
+};
+
+// SurfaceInteraction::offset_p with offset_floor 1.
+inline VV3 voffset_p(VV3 p, VV3 n, VV3 d) {
+  vf mag = (1.0f + vmax(vabs(p.x), vmax(vabs(p.y), vabs(p.z)))) * gdvr::kRayEpsilon;
+  mag = vsel(vdot(n, d) < 0, -mag, mag);
+  return p + n * mag;
+}
+
+// What kLanes paths' vertices read, and what they write.
+struct VIn {
+  vi alive;
+  VPcg32 rng;
+  VV3 n, p, ray_d, albedo, throughput;
+  vi depth;
+};
+struct VOut {
+  vi alive_before, connect, alive;
+  VV3 contribution, shadow_o, shadow_d, throughput, next_o, next_d;
+  vf shadow_tmax;
+  vi depth;
+  vu64 rng_state;
+};
+
+VOut simd_vertex_math(const Light& light, VIn in) {
+  VOut out;
+  out.alive_before = in.alive != 0;
+  vi alive = out.alive_before;
+  VPcg32 rng = in.rng;
+  const VV3 n = in.n, p = in.p, albedo = in.albedo;
+  VV3 throughput = in.throughput;
+
+  // Frame(n), Duff et al.
+  const vf sign = (vf)(((vu)n.z & 0x80000000u) | 0x3f800000u);  // copysign(1, n.z)
+  const vf a = -1.0f / (sign + n.z);
+  const vf b = n.x * n.y * a;
+  const VV3 s{1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
+  const VV3 t{b, sign + n.y * n.y * a, -n.y};
+  alive &= vdot(-in.ray_d, n) > 0.0f;
+
+  // Next-event estimation.
+  (void)rng.next_float(alive);
+  const vf ux = rng.next_float(alive), uy = rng.next_float(alive);
+  // Distribution1D::sample over two equal weights: floor(u n) in double.
+  const vd scaled = __builtin_convertvector(ux, vd) * 2.0;
+  vi64 ti = __builtin_convertvector(scaled, vi64);
+  ti = ti < 1 ? ti : 1;
+  vd rest = scaled - __builtin_convertvector(ti, vd);
+  rest = rest < 0.0 ? 0.0 : (double(0x1.fffffep-1f) < rest ? double(0x1.fffffep-1f) : rest);
+  const vf u_tri = __builtin_convertvector(rest, vf);
+  // The triangle, gathered lane by lane (a general light list is a gather).
+  VV3 p0, p1, p2, tn;
+  for (int i = 0; i < kLanes; ++i) {
+    const size_t k = size_t(ti[i]);
+    p0.x[i] = light.p0[k].x, p0.y[i] = light.p0[k].y, p0.z[i] = light.p0[k].z;
+    p1.x[i] = light.p1[k].x, p1.y[i] = light.p1[k].y, p1.z[i] = light.p1[k].z;
+    p2.x[i] = light.p2[k].x, p2.y[i] = light.p2[k].y, p2.z[i] = light.p2[k].z;
+    tn.x[i] = light.n[k].x, tn.y[i] = light.n[k].y, tn.z[i] = light.n[k].z;
+  }
+  const vf tt = safe_vsqrt(1.0f - u_tri);
+  const vf b1 = 1.0f - tt, b2 = tt * uy;
+  const VV3 lp = p0 * (1.0f - b1 - b2) + p1 * b1 + p2 * b2;
+  const VV3 d = lp - p;
+  const vf dist2 = vdot(d, d);
+  const vf dist = vsqrt(dist2);
+  const vf abs_dn = vabs(vdot(d, tn));
+  const vf pdf_area = vsel(abs_dn > 0, dist2 * (dist / (light.area * abs_dn)), splat(0.0f));
+  const vi finite = vabs(pdf_area) < std::numeric_limits<float>::infinity();
+  const VV3 dir = d * (1.0f / dist);
+  const vf pdf = pdf_area * (1.0f / 1.0f);
+  const vf wl_z = vdot(dir, n);
+  out.connect = alive & (dist > 0) & (pdf_area > 0) & finite & (vdot(tn, dir) < 0) & (wl_z > 0.0f);
+  const VV3 weight = splat3(light.radiance) * (1.0f / pdf);
+  const vf bsdf_pdf = gdvr::kInvPi * wl_z;
+  const VV3 f = albedo * bsdf_pdf;
+  const vf pa = pdf * pdf, pb = bsdf_pdf * bsdf_pdf;
+  // mis_power: 0 where pa underflows, 1 where it overflows.
+  const vf w = vsel(pa > 0, vsel(vabs(pa) < std::numeric_limits<float>::infinity(), pa / (pa + pb), splat(1.0f)),
+                    splat(0.0f));
+  out.contribution = throughput * f * weight * w;
+  out.shadow_o = voffset_p(p, n, dir);
+  out.shadow_d = dir;
+  out.shadow_tmax = dist * (1.0f - gdvr::kShadowEpsilon);
+
+  // The bounce: square_to_cosine_hemisphere through the concentric disk.
+  (void)rng.next_float(alive);
+  const vf vx = rng.next_float(alive), vy = rng.next_float(alive);
+  const vf x = 2.0f * vx - 1.0f, y = 2.0f * vy - 1.0f;
+  const vi origin = (x == 0) & (y == 0);
+  const vi x_major = vabs(x) > vabs(y);
+  const vf r = vsel(x_major, x, y);
+  const vf arg = (gdvr::kPi / 4.0f) * (vsel(x_major, y, x) / vsel(origin, splat(1.0f), r));
+  const vf x2 = arg * arg;  // sincos_eighth_turn
+  const vf sn = arg * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f + x2 * (1.0f / 362880.0f)))));
+  const vf cs =
+      1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f + x2 * (-1.0f / 3628800.0f)))));
+  const vf dx = vsel(origin, splat(0.0f), vsel(x_major, r * cs, r * sn));
+  const vf dy = vsel(origin, splat(0.0f), vsel(x_major, r * sn, r * cs));
+  const vf z = safe_vsqrt(1.0f - dx * dx - dy * dy);
+  alive &= gdvr::kInvPi * z > 0.0f;
+  const VV3 wi = to_world(s, t, n, dx, dy, z);
+  throughput = vsel3(alive, throughput * albedo, throughput);
+  // Russian roulette.
+  const vf throughput_max = vmax(throughput.x, vmax(throughput.y, throughput.z));
+  const vi rr = alive & (in.depth + 1 >= kRrDepth);
+  const vf q = vmin(throughput_max * 1.0f * 1.0f, splat(1.0f));
+  const vf u = rng.next_float(rr);
+  alive &= ~rr | (u < q);
+  out.throughput = vsel3(rr & alive, throughput * (1.0f / q), throughput);
+  out.next_o = voffset_p(p, n, wi);
+  out.next_d = wi;
+  out.depth = in.depth + (alive & 1);
+  out.alive = alive;
+  out.rng_state = rng.state;
+  return out;
+}
+
+// State as struct of arrays: whole vectors in and out.
+struct SoaPaths {
+  alignas(64) uint64_t rng_state[kPaths], rng_inc[kPaths];
+  alignas(64) float p[3][kPaths], n[3][kPaths], ray_d[3][kPaths], albedo[3][kPaths], throughput[3][kPaths];
+  alignas(64) int32_t depth[kPaths], alive[kPaths];
+  alignas(64) float shadow_o[3][kPaths], shadow_d[3][kPaths], contribution[3][kPaths], next_o[3][kPaths],
+      next_d[3][kPaths], shadow_tmax[kPaths];
+  alignas(64) int32_t shadow_pending[kPaths];
+};
+
+template <class V>
+inline V load(const void* p) {
+  V v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class V>
+inline void store(void* p, V v) {
+  std::memcpy(p, &v, sizeof v);
+}
+inline VV3 load3(const float (*a)[kPaths], int k) { return {load<vf>(&a[0][k]), load<vf>(&a[1][k]), load<vf>(&a[2][k])}; }
+// Stores only the lanes in m (the scalar form leaves the others as they were).
+inline void store3(float (*a)[kPaths], int k, VV3 v, vi m) {
+  store(&a[0][k], vsel(m, v.x, load<vf>(&a[0][k])));
+  store(&a[1][k], vsel(m, v.y, load<vf>(&a[1][k])));
+  store(&a[2][k], vsel(m, v.z, load<vf>(&a[2][k])));
+}
+
+void simd_vertices(const Light& light, SoaPaths* sp, int k) {
+  VIn in{load<vi>(&sp->alive[k]), VPcg32{load<vu64>(&sp->rng_state[k]), load<vu64>(&sp->rng_inc[k])},
+         load3(sp->n, k), load3(sp->p, k), load3(sp->ray_d, k), load3(sp->albedo, k), load3(sp->throughput, k),
+         load<vi>(&sp->depth[k])};
+  const VOut o = simd_vertex_math(light, in);
+  store3(sp->contribution, k, o.contribution, o.connect);
+  store3(sp->shadow_o, k, o.shadow_o, o.connect);
+  store3(sp->shadow_d, k, o.shadow_d, o.connect);
+  store(&sp->shadow_tmax[k], vsel(o.connect, o.shadow_tmax, load<vf>(&sp->shadow_tmax[k])));
+  store(&sp->shadow_pending[k], vsel(o.alive_before, (vi)(o.connect & 1), load<vi>(&sp->shadow_pending[k])));
+  store3(sp->throughput, k, o.throughput, o.alive_before);
+  store3(sp->next_o, k, o.next_o, o.alive);
+  store3(sp->next_d, k, o.next_d, o.alive);
+  store(&sp->depth[k], o.depth);
+  store(&sp->alive[k], o.alive & 1);
+  store(&sp->rng_state[k], o.rng_state);
+}
+
+// State as the path structs the renderer has now: gathered into vectors and
+// scattered back lane by lane.
+inline void gather3(VV3* v, int i, float x, float y, float z) { v->x[i] = x, v->y[i] = y, v->z[i] = z; }
+inline Vec3f lane_vec(const VV3& v, int i) { return {v.x[i], v.y[i], v.z[i]}; }
+inline Rgb lane_rgb(const VV3& v, int i) { return {v.x[i], v.y[i], v.z[i]}; }
+void simd_vertices_aos(const Light& light, ScalarPath* paths) {
+  VIn in;
+  for (int i = 0; i < kLanes; ++i) {
+    const ScalarPath& st = paths[i];
+    uint64_t words[2];
+    pcg_words(st.rng, words);
+    in.alive[i] = st.alive;
+    in.rng.state[i] = words[0], in.rng.inc[i] = words[1];
+    gather3(&in.n, i, st.n.x, st.n.y, st.n.z), gather3(&in.p, i, st.p.x, st.p.y, st.p.z);
+    gather3(&in.ray_d, i, st.ray_d.x, st.ray_d.y, st.ray_d.z);
+    gather3(&in.albedo, i, st.albedo.r, st.albedo.g, st.albedo.b);
+    gather3(&in.throughput, i, st.throughput.r, st.throughput.g, st.throughput.b);
+    in.depth[i] = st.depth;
+  }
+  const VOut o = simd_vertex_math(light, in);
+  for (int i = 0; i < kLanes; ++i) {
+    ScalarPath& st = paths[i];
+    if (!o.alive_before[i]) continue;
+    st.shadow_pending = o.connect[i] != 0;
+    if (o.connect[i]) {
+      st.contribution = lane_rgb(o.contribution, i), st.shadow_o = lane_vec(o.shadow_o, i);
+      st.shadow_d = lane_vec(o.shadow_d, i), st.shadow_tmax = o.shadow_tmax[i];
+    }
+    st.throughput = lane_rgb(o.throughput, i);
+    st.alive = o.alive[i] != 0;
+    if (st.alive) st.next_o = lane_vec(o.next_o, i), st.next_d = lane_vec(o.next_d, i);
+    st.depth = o.depth[i];
+    uint64_t words[2] = {o.rng_state[i], uint64_t(in.rng.inc[i])};
+    set_pcg_words(&st.rng, words);
+  }
+}
+
+// ------------------------------------------------------------------- harness
+Light cbox_light() {
+  // The quad light of a Cornell box, facing down.
+  const Vec3f a{-0.24f, 1.98f, -0.22f}, b{0.23f, 1.98f, -0.22f}, c{0.23f, 1.98f, 0.16f}, d{-0.24f, 1.98f, 0.16f};
+  Light l;
+  l.p0[0] = a, l.p1[0] = b, l.p2[0] = c;
+  l.p0[1] = a, l.p1[1] = c, l.p2[1] = d;
+  l.n[0] = l.n[1] = Vec3f(0, -1, 0);
+  l.area = (b.x - a.x) * (c.z - b.z);
+  l.radiance = Rgb(17.0f, 12.0f, 4.0f);
+  return l;
+}
+
+// Vertices on the walls of a 2-unit box, reached from random directions.
+std::vector<ScalarPath> make_paths(int count, uint64_t seed) {
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<ScalarPath> paths(static_cast<size_t>(count));
+  const Vec3f normals[5] = {{0, 1, 0}, {0, -1, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 0, 1}};
+  const Rgb albedos[3] = {{0.58f, 0.57f, 0.55f}, {0.63f, 0.065f, 0.05f}, {0.14f, 0.45f, 0.091f}};
+  for (ScalarPath& st : paths) {
+    const int wall = int(u(gen) * 5) % 5;
+    const Vec3f n = normals[wall];
+    Vec3f p{u(gen) * 2 - 1, u(gen) * 2, u(gen) * 2 - 1};
+    if (n.y > 0) p.y = 0; else if (n.y < 0) p.y = 1.99f;
+    if (n.x > 0) p.x = -1; else if (n.x < 0) p.x = 1;
+    if (n.z > 0) p.z = -1;
+    // A ray towards p from a random point inside the box.
+    const Vec3f from{u(gen) * 1.6f - 0.8f, u(gen) * 1.6f + 0.2f, u(gen) * 1.6f - 0.8f};
+    st.rng = gdvr::Pcg32(gen(), gen());
+    st.p = p, st.n = n, st.ray_d = gdvr::normalize(p - from), st.albedo = albedos[wall % 3];
+    st.throughput = Rgb(u(gen), u(gen), u(gen));
+    st.depth = int(u(gen) * 8);
+    st.alive = true;
+    st.shadow_o = st.shadow_d = st.next_o = st.next_d = Vec3f(0.0f);
+    st.contribution = Rgb(0.0f);
+    st.shadow_tmax = 0;
+    st.shadow_pending = false;
+  }
+  return paths;
+}
+
+inline void put3(float (*a)[kPaths], int i, float x, float y, float z) { a[0][i] = x, a[1][i] = y, a[2][i] = z; }
+void to_soa(const ScalarPath* in, SoaPaths* out) {
+  for (int i = 0; i < kPaths; ++i) {
+    const ScalarPath& st = in[i];
+    uint64_t words[2];
+    pcg_words(st.rng, words);
+    out->rng_state[i] = words[0], out->rng_inc[i] = words[1];
+    put3(out->p, i, st.p.x, st.p.y, st.p.z), put3(out->n, i, st.n.x, st.n.y, st.n.z);
+    put3(out->ray_d, i, st.ray_d.x, st.ray_d.y, st.ray_d.z);
+    put3(out->albedo, i, st.albedo.r, st.albedo.g, st.albedo.b);
+    put3(out->throughput, i, st.throughput.r, st.throughput.g, st.throughput.b);
+    put3(out->shadow_o, i, 0, 0, 0), put3(out->shadow_d, i, 0, 0, 0), put3(out->contribution, i, 0, 0, 0);
+    put3(out->next_o, i, 0, 0, 0), put3(out->next_d, i, 0, 0, 0);
+    out->depth[i] = st.depth, out->alive[i] = st.alive, out->shadow_tmax[i] = st.shadow_tmax;
+    out->shadow_pending[i] = st.shadow_pending;
+  }
+}
+
+bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+bool same(float x, float y, float z, const float (*soa)[kPaths], int i) {
+  return same_bits(x, soa[0][i]) && same_bits(y, soa[1][i]) && same_bits(z, soa[2][i]);
+}
+bool same(Vec3f v, const float (*soa)[kPaths], int i) { return same(v.x, v.y, v.z, soa, i); }
+bool same(Rgb c, const float (*soa)[kPaths], int i) { return same(c.r, c.g, c.b, soa, i); }
+bool same_path(const ScalarPath& x, const ScalarPath& y) {
+  uint64_t wx[2], wy[2];
+  pcg_words(x.rng, wx), pcg_words(y.rng, wy);
+  auto eq = [](const auto& a, const auto& b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+  return wx[0] == wy[0] && x.alive == y.alive && x.depth == y.depth && x.shadow_pending == y.shadow_pending &&
+         eq(x.throughput, y.throughput) && eq(x.contribution, y.contribution) && eq(x.shadow_o, y.shadow_o) &&
+         eq(x.shadow_d, y.shadow_d) && same_bits(x.shadow_tmax, y.shadow_tmax) && eq(x.next_o, y.next_o) &&
+         eq(x.next_d, y.next_d);
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+int main() {
+  const Light light = cbox_light();
+  constexpr int kBatches = 256, kBounces = 4, kRuns = 15;
+  const std::vector<ScalarPath> initial = make_paths(kPaths * kBatches, 12345);
+  std::vector<SoaPaths> soa_initial(kBatches);
+  for (int bt = 0; bt < kBatches; ++bt) to_soa(&initial[size_t(bt) * kPaths], &soa_initial[size_t(bt)]);
+  auto run_scalar = [&](std::vector<ScalarPath>* paths) {
+    size_t vertices = 0;
+    for (int bt = 0; bt < kBatches; ++bt)
+      for (int bounce = 0; bounce < kBounces; ++bounce)
+        for (int i = 0; i < kPaths; ++i) {
+          ScalarPath& st = (*paths)[size_t(bt) * kPaths + size_t(i)];
+          if (st.alive) scalar_vertex(light, &st), ++vertices;
+        }
+    return vertices;
+  };
+  auto run_soa = [&](std::vector<SoaPaths>* soa) {
+    for (int bt = 0; bt < kBatches; ++bt)
+      for (int bounce = 0; bounce < kBounces; ++bounce)
+        for (int k = 0; k < kPaths; k += kLanes) simd_vertices(light, &(*soa)[size_t(bt)], k);
+  };
+  auto run_gathered = [&](std::vector<ScalarPath>* paths) {
+    for (int bt = 0; bt < kBatches; ++bt)
+      for (int bounce = 0; bounce < kBounces; ++bounce)
+        for (int k = 0; k < kPaths; k += kLanes) simd_vertices_aos(light, &(*paths)[size_t(bt) * kPaths + size_t(k)]);
+  };
+
+  // Same bits: kBounces vertices of every path in all three forms (paths
+  // stay where they are; the numbers and the throughput move on).
+  std::vector<ScalarPath> scalar = initial, gathered = initial;
+  std::vector<SoaPaths> soa = soa_initial;
+  const size_t vertices = run_scalar(&scalar);
+  run_soa(&soa);
+  run_gathered(&gathered);
+  size_t soa_mismatches = 0, gathered_mismatches = 0;
+  for (size_t j = 0; j < scalar.size(); ++j) {
+    const ScalarPath& st = scalar[j];
+    const SoaPaths& sp = soa[j / kPaths];
+    const int i = int(j % kPaths);
+    const bool ok = st.alive == bool(sp.alive[i]) && st.depth == sp.depth[i] &&
+                    st.shadow_pending == bool(sp.shadow_pending[i]) && same(st.throughput, sp.throughput, i) &&
+                    same(st.contribution, sp.contribution, i) && same(st.shadow_o, sp.shadow_o, i) &&
+                    same(st.shadow_d, sp.shadow_d, i) && same_bits(st.shadow_tmax, sp.shadow_tmax[i]) &&
+                    same(st.next_o, sp.next_o, i) && same(st.next_d, sp.next_d, i);
+    uint64_t words[2];
+    pcg_words(st.rng, words);
+    soa_mismatches += !ok || words[0] != sp.rng_state[i];
+    gathered_mismatches += !same_path(st, gathered[j]);
+  }
+  std::printf("lanes %d, %zu vertices of %zu paths; paths that differ from the scalar form: %zu (struct of arrays), %zu (gathered)\n",
+              kLanes, vertices, scalar.size(), soa_mismatches, gathered_mismatches);
+
+  // Time: the three forms alternate within each run.
+  std::vector<double> t_scalar, t_soa, t_gathered;
+  auto ns_per_vertex = [&](auto t0, auto t1) {
+    return std::chrono::duration<double, std::nano>(t1 - t0).count() / double(vertices);
+  };
+  for (int run = 0; run < kRuns; ++run) {
+    scalar = initial, gathered = initial, soa = soa_initial;
+    auto t0 = std::chrono::steady_clock::now();
+    run_scalar(&scalar);
+    auto t1 = std::chrono::steady_clock::now();
+    run_soa(&soa);
+    auto t2 = std::chrono::steady_clock::now();
+    run_gathered(&gathered);
+    auto t3 = std::chrono::steady_clock::now();
+    t_scalar.push_back(ns_per_vertex(t0, t1));
+    t_soa.push_back(ns_per_vertex(t1, t2));
+    t_gathered.push_back(ns_per_vertex(t2, t3));
+  }
+  const double scalar_ns = median(t_scalar);
+  std::printf("scalar                 %6.2f ns per vertex\n", scalar_ns);
+  std::printf("simd, struct of arrays %6.2f ns per vertex (%.2fx)\n", median(t_soa), scalar_ns / median(t_soa));
+  std::printf("simd, gathered structs %6.2f ns per vertex (%.2fx)   medians of %d runs\n", median(t_gathered),
+              scalar_ns / median(t_gathered), kRuns);
+  return soa_mismatches == 0 && gathered_mismatches == 0 ? 0 : 1;
+}
