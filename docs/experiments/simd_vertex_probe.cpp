@@ -3,7 +3,8 @@
 // (docs/experiments/README.md has the commands and what they measured).
 //
 // One diffuse path vertex of a Cornell box, the only kind of vertex cbox has,
-// with the same arithmetic in the same order as core/: the shading frame,
+// with the same arithmetic in the same order as core/: the hit's shading
+// from the mesh (FrameScene::interaction for a static triangle), the frame,
 // next-event estimation towards a quad light (triangle pick, uniform point,
 // area-to-solid-angle pdf), the diffuse BSDF and the power heuristic, the
 // shadow ray, the cosine-weighted bounce through the concentric disk, Russian
@@ -36,6 +37,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <immintrin.h>
+
 #include "core/math/distribution.h"
 #include "core/math/frame.h"
 #include "core/math/rng.h"
@@ -66,11 +69,23 @@ struct Light {
   Rgb radiance;
 };
 
+// The walls, as FrameScene holds a static mesh: indices, positions, face
+// normals and offset floors precomputed per triangle, and here the BSDF's
+// constant reflectance per triangle.
+struct Mesh {
+  std::vector<uint32_t> indices;
+  std::vector<Vec3f> positions, face_normals;
+  std::vector<float> offset_floors;
+  std::vector<Rgb> albedo;
+};
+
 // What a vertex reads and writes, as PathState holds it (the fields used).
 struct ScalarPath {
   gdvr::Pcg32 rng;
-  Vec3f p, n, ray_d;
-  Rgb albedo, throughput;
+  uint32_t prim;  // the hit: triangle and barycentrics, as Embree returns them
+  float b1, b2;
+  Vec3f ray_d;
+  Rgb throughput;
   int depth;
   bool alive;
   // outputs
@@ -91,12 +106,18 @@ inline void set_pcg_words(gdvr::Pcg32* rng, const uint64_t w[2]) {
 
 // Steps of FrameScene::sample_emitter_direction (one area emitter),
 // connect_emitter with the diffuse BSDF, sample_bsdf_drawn and Russian roulette.
-void scalar_vertex(const Light& light, ScalarPath* st) {
+void scalar_vertex(const Light& light, const Mesh& mesh, ScalarPath* st) {
+  // The hit (FrameScene::interaction, a flat triangle of a static mesh).
   gdvr::SurfaceInteraction si;
-  si.p = st->p;
-  si.n = st->n;
-  si.sh_frame = gdvr::Frame(st->n);
-  si.offset_floor = 1.0f;
+  const uint32_t prim = st->prim;
+  const uint32_t i0 = mesh.indices[3 * prim], i1 = mesh.indices[3 * prim + 1], i2 = mesh.indices[3 * prim + 2];
+  const float b1 = st->b1, b2 = st->b2, b0 = 1.0f - b1 - b2;
+  si.p = mesh.positions[i0] * b0 + mesh.positions[i1] * b1 + mesh.positions[i2] * b2;
+  si.offset_floor = mesh.offset_floors[prim];
+  si.n = mesh.face_normals[prim];
+  si.sh_frame = gdvr::Frame(si.n);
+  si.uv = {b1, b2};
+  const Rgb albedo = mesh.albedo[prim];
   const Vec3f wo = si.sh_frame.to_local(-st->ray_d);
   st->shadow_pending = false;
   if (wo.z <= 0.0f) {  // the diffuse BSDF has nothing from below
@@ -110,8 +131,8 @@ void scalar_vertex(const Light& light, ScalarPath* st) {
   const float select_pdf = 1.0f / 1.0f;
   float u_tri;
   const size_t t = light.triangles.sample(ux, &u_tri);
-  const Vec2f b = gdvr::square_to_uniform_triangle({u_tri, uy});
-  const Vec3f lp = light.p0[t] * (1.0f - b.x - b.y) + light.p1[t] * b.x + light.p2[t] * b.y;
+  const Vec2f lb = gdvr::square_to_uniform_triangle({u_tri, uy});
+  const Vec3f lp = light.p0[t] * (1.0f - lb.x - lb.y) + light.p1[t] * lb.x + light.p2[t] * lb.y;
   const Vec3f d = lp - si.p;
   const float dist2 = gdvr::length_squared(d);
   const float dist = std::sqrt(dist2);
@@ -125,7 +146,7 @@ void scalar_vertex(const Light& light, ScalarPath* st) {
       const Vec3f wl = si.sh_frame.to_local(dir);
       if (wl.z > 0.0f) {
         const float bsdf_pdf = gdvr::square_to_cosine_hemisphere_pdf(wl);
-        const Rgb f = st->albedo * bsdf_pdf;
+        const Rgb f = albedo * bsdf_pdf;
         const float w = gdvr::mis_power(pdf, bsdf_pdf);
         const gdvr::Ray shadow = si.spawn_ray(dir);
         st->shadow_o = shadow.o;
@@ -146,7 +167,7 @@ void scalar_vertex(const Light& light, ScalarPath* st) {
     st->alive = false;
     return;
   }
-  st->throughput *= st->albedo;  // f cos / pdf
+  st->throughput *= albedo;  // f cos / pdf
   const gdvr::Ray next = si.spawn_ray(si.sh_frame.to_world(wi));
   // Russian roulette.
   const float throughput_max = gdvr::max_component(st->throughput);
@@ -185,9 +206,46 @@ inline vf vmin(vf a, vf b) { return b < a ? b : a; }  // std::min(a, b)
 inline vf vsel(vi m, vf a, vf b) { return m ? a : b; }
 inline vi vsel(vi m, vi a, vi b) { return m ? a : b; }
 
+// base[idx[i]] in every lane: the hardware gather where the ISA has one
+// (AVX2, AVX-512), else lane by lane.
+inline vf gather(const float* base, vi idx) {
+#if defined(__AVX512F__) && LANES == 16
+  return (vf)_mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff, (__m512i)idx, base, 4);
+#elif defined(__AVX2__) && LANES == 8
+  return (vf)_mm256_i32gather_ps(base, (__m256i)idx, 4);
+#elif defined(__AVX2__) && LANES == 4
+  return (vf)_mm_i32gather_ps(base, (__m128i)idx, 4);
+#else
+  vf r;
+  for (int i = 0; i < kLanes; ++i) r[i] = base[idx[i]];
+  return r;
+#endif
+}
+inline vi gather(const int32_t* base, vi idx) {
+#if defined(__AVX512F__) && LANES == 16
+  return (vi)_mm512_mask_i32gather_epi32(_mm512_setzero_si512(), 0xffff, (__m512i)idx, base, 4);
+#elif defined(__AVX2__) && LANES == 8
+  return (vi)_mm256_i32gather_epi32(base, (__m256i)idx, 4);
+#elif defined(__AVX2__) && LANES == 4
+  return (vi)_mm_i32gather_epi32(base, (__m128i)idx, 4);
+#else
+  vi r;
+  for (int i = 0; i < kLanes; ++i) r[i] = base[idx[i]];
+  return r;
+#endif
+}
+
 struct VV3 {
   vf x, y, z;
 };
+// Element `idx` of an array of three-float records (Vec3f, Rgb).
+template <class T>
+inline VV3 gather3(const T* records, vi idx) {
+  static_assert(sizeof(T) == 3 * sizeof(float));
+  const float* base = reinterpret_cast<const float*>(records);
+  const vi at = idx * 3;
+  return {gather(base, at), gather(base + 1, at), gather(base + 2, at)};
+}
 inline VV3 operator+(VV3 a, VV3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 inline VV3 operator-(VV3 a, VV3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 inline VV3 operator-(VV3 a) { return {-a.x, -a.y, -a.z}; }
@@ -218,9 +276,9 @@ struct VPcg32 {
   }
 };
 
-// SurfaceInteraction::offset_p with offset_floor 1.
-inline VV3 voffset_p(VV3 p, VV3 n, VV3 d) {
-  vf mag = (1.0f + vmax(vabs(p.x), vmax(vabs(p.y), vabs(p.z)))) * gdvr::kRayEpsilon;
+// SurfaceInteraction::offset_p.
+inline VV3 voffset_p(VV3 p, vf offset_floor, VV3 n, VV3 d) {
+  vf mag = (offset_floor + vmax(vabs(p.x), vmax(vabs(p.y), vabs(p.z)))) * gdvr::kRayEpsilon;
   mag = vsel(vdot(n, d) < 0, -mag, mag);
   return p + n * mag;
 }
@@ -229,7 +287,9 @@ inline VV3 voffset_p(VV3 p, VV3 n, VV3 d) {
 struct VIn {
   vi alive;
   VPcg32 rng;
-  VV3 n, p, ray_d, albedo, throughput;
+  vi prim;
+  vf b1, b2;
+  VV3 ray_d, throughput;
   vi depth;
 };
 struct VOut {
@@ -240,13 +300,24 @@ struct VOut {
   vu64 rng_state;
 };
 
-VOut simd_vertex_math(const Light& light, VIn in) {
+VOut simd_vertex_math(const Light& light, const Mesh& mesh, VIn in) {
   VOut out;
   out.alive_before = in.alive != 0;
   vi alive = out.alive_before;
   VPcg32 rng = in.rng;
-  const VV3 n = in.n, p = in.p, albedo = in.albedo;
   VV3 throughput = in.throughput;
+
+  // The hit: the triangle's corners, normal, offset floor and reflectance,
+  // gathered.
+  const int32_t* indices = reinterpret_cast<const int32_t*>(mesh.indices.data());
+  const vi corner = in.prim * 3;
+  const VV3 c0 = gather3(mesh.positions.data(), gather(indices, corner));
+  const VV3 c1 = gather3(mesh.positions.data(), gather(indices, corner + 1));
+  const VV3 c2 = gather3(mesh.positions.data(), gather(indices, corner + 2));
+  const VV3 n = gather3(mesh.face_normals.data(), in.prim);
+  const VV3 albedo = gather3(mesh.albedo.data(), in.prim);
+  const vf offset_floor = gather(mesh.offset_floors.data(), in.prim);
+  const VV3 p = c0 * (1.0f - in.b1 - in.b2) + c1 * in.b1 + c2 * in.b2;
 
   // Frame(n), Duff et al.
   const vf sign = (vf)(((vu)n.z & 0x80000000u) | 0x3f800000u);  // copysign(1, n.z)
@@ -266,15 +337,10 @@ VOut simd_vertex_math(const Light& light, VIn in) {
   vd rest = scaled - __builtin_convertvector(ti, vd);
   rest = rest < 0.0 ? 0.0 : (double(0x1.fffffep-1f) < rest ? double(0x1.fffffep-1f) : rest);
   const vf u_tri = __builtin_convertvector(rest, vf);
-  // The triangle, gathered lane by lane (a general light list is a gather).
-  VV3 p0, p1, p2, tn;
-  for (int i = 0; i < kLanes; ++i) {
-    const size_t k = size_t(ti[i]);
-    p0.x[i] = light.p0[k].x, p0.y[i] = light.p0[k].y, p0.z[i] = light.p0[k].z;
-    p1.x[i] = light.p1[k].x, p1.y[i] = light.p1[k].y, p1.z[i] = light.p1[k].z;
-    p2.x[i] = light.p2[k].x, p2.y[i] = light.p2[k].y, p2.z[i] = light.p2[k].z;
-    tn.x[i] = light.n[k].x, tn.y[i] = light.n[k].y, tn.z[i] = light.n[k].z;
-  }
+  // The light's triangle, gathered (a general light list is a gather).
+  const vi light_tri = __builtin_convertvector(ti, vi);
+  const VV3 p0 = gather3(light.p0, light_tri), p1 = gather3(light.p1, light_tri), p2 = gather3(light.p2, light_tri);
+  const VV3 tn = gather3(light.n, light_tri);
   const vf tt = safe_vsqrt(1.0f - u_tri);
   const vf b1 = 1.0f - tt, b2 = tt * uy;
   const VV3 lp = p0 * (1.0f - b1 - b2) + p1 * b1 + p2 * b2;
@@ -296,7 +362,7 @@ VOut simd_vertex_math(const Light& light, VIn in) {
   const vf w = vsel(pa > 0, vsel(vabs(pa) < std::numeric_limits<float>::infinity(), pa / (pa + pb), splat(1.0f)),
                     splat(0.0f));
   out.contribution = throughput * f * weight * w;
-  out.shadow_o = voffset_p(p, n, dir);
+  out.shadow_o = voffset_p(p, offset_floor, n, dir);
   out.shadow_d = dir;
   out.shadow_tmax = dist * (1.0f - gdvr::kShadowEpsilon);
 
@@ -325,7 +391,7 @@ VOut simd_vertex_math(const Light& light, VIn in) {
   const vf u = rng.next_float(rr);
   alive &= ~rr | (u < q);
   out.throughput = vsel3(rr & alive, throughput * (1.0f / q), throughput);
-  out.next_o = voffset_p(p, n, wi);
+  out.next_o = voffset_p(p, offset_floor, n, wi);
   out.next_d = wi;
   out.depth = in.depth + (alive & 1);
   out.alive = alive;
@@ -336,7 +402,8 @@ VOut simd_vertex_math(const Light& light, VIn in) {
 // State as struct of arrays: whole vectors in and out.
 struct SoaPaths {
   alignas(64) uint64_t rng_state[kPaths], rng_inc[kPaths];
-  alignas(64) float p[3][kPaths], n[3][kPaths], ray_d[3][kPaths], albedo[3][kPaths], throughput[3][kPaths];
+  alignas(64) int32_t prim[kPaths];
+  alignas(64) float b1[kPaths], b2[kPaths], ray_d[3][kPaths], throughput[3][kPaths];
   alignas(64) int32_t depth[kPaths], alive[kPaths];
   alignas(64) float shadow_o[3][kPaths], shadow_d[3][kPaths], contribution[3][kPaths], next_o[3][kPaths],
       next_d[3][kPaths], shadow_tmax[kPaths];
@@ -361,11 +428,11 @@ inline void store3(float (*a)[kPaths], int k, VV3 v, vi m) {
   store(&a[2][k], vsel(m, v.z, load<vf>(&a[2][k])));
 }
 
-void simd_vertices(const Light& light, SoaPaths* sp, int k) {
+void simd_vertices(const Light& light, const Mesh& mesh, SoaPaths* sp, int k) {
   VIn in{load<vi>(&sp->alive[k]), VPcg32{load<vu64>(&sp->rng_state[k]), load<vu64>(&sp->rng_inc[k])},
-         load3(sp->n, k), load3(sp->p, k), load3(sp->ray_d, k), load3(sp->albedo, k), load3(sp->throughput, k),
-         load<vi>(&sp->depth[k])};
-  const VOut o = simd_vertex_math(light, in);
+         load<vi>(&sp->prim[k]), load<vf>(&sp->b1[k]), load<vf>(&sp->b2[k]), load3(sp->ray_d, k),
+         load3(sp->throughput, k), load<vi>(&sp->depth[k])};
+  const VOut o = simd_vertex_math(light, mesh, in);
   store3(sp->contribution, k, o.contribution, o.connect);
   store3(sp->shadow_o, k, o.shadow_o, o.connect);
   store3(sp->shadow_d, k, o.shadow_d, o.connect);
@@ -384,7 +451,7 @@ void simd_vertices(const Light& light, SoaPaths* sp, int k) {
 inline void gather3(VV3* v, int i, float x, float y, float z) { v->x[i] = x, v->y[i] = y, v->z[i] = z; }
 inline Vec3f lane_vec(const VV3& v, int i) { return {v.x[i], v.y[i], v.z[i]}; }
 inline Rgb lane_rgb(const VV3& v, int i) { return {v.x[i], v.y[i], v.z[i]}; }
-void simd_vertices_aos(const Light& light, ScalarPath* paths) {
+void simd_vertices_aos(const Light& light, const Mesh& mesh, ScalarPath* paths) {
   VIn in;
   for (int i = 0; i < kLanes; ++i) {
     const ScalarPath& st = paths[i];
@@ -392,13 +459,12 @@ void simd_vertices_aos(const Light& light, ScalarPath* paths) {
     pcg_words(st.rng, words);
     in.alive[i] = st.alive;
     in.rng.state[i] = words[0], in.rng.inc[i] = words[1];
-    gather3(&in.n, i, st.n.x, st.n.y, st.n.z), gather3(&in.p, i, st.p.x, st.p.y, st.p.z);
+    in.prim[i] = int32_t(st.prim), in.b1[i] = st.b1, in.b2[i] = st.b2;
     gather3(&in.ray_d, i, st.ray_d.x, st.ray_d.y, st.ray_d.z);
-    gather3(&in.albedo, i, st.albedo.r, st.albedo.g, st.albedo.b);
     gather3(&in.throughput, i, st.throughput.r, st.throughput.g, st.throughput.b);
     in.depth[i] = st.depth;
   }
-  const VOut o = simd_vertex_math(light, in);
+  const VOut o = simd_vertex_math(light, mesh, in);
   for (int i = 0; i < kLanes; ++i) {
     ScalarPath& st = paths[i];
     if (!o.alive_before[i]) continue;
@@ -429,24 +495,62 @@ Light cbox_light() {
   return l;
 }
 
-// Vertices on the walls of a 2-unit box, reached from random directions.
-std::vector<ScalarPath> make_paths(int count, uint64_t seed) {
+// The five walls of a 2-unit box, each a kGrid x kGrid grid of quads (two
+// triangles each), facing inwards; the floor, ceiling and back wall white,
+// the sides red and green.
+Mesh cbox_walls() {
+  constexpr int kGrid = 4;
+  const Rgb white{0.58f, 0.57f, 0.55f}, red{0.63f, 0.065f, 0.05f}, green{0.14f, 0.45f, 0.091f};
+  struct Wall {
+    Vec3f origin, du, dv;  // du x dv faces inwards
+    Rgb albedo;
+  };
+  const Wall walls[5] = {{{-1, 0, -1}, {0, 0, 2}, {2, 0, 0}, white},   // floor, +y
+                         {{-1, 2, -1}, {2, 0, 0}, {0, 0, 2}, white},   // ceiling, -y
+                         {{-1, 0, -1}, {2, 0, 0}, {0, 2, 0}, white},   // back, +z
+                         {{-1, 0, -1}, {0, 2, 0}, {0, 0, 2}, red},     // left, +x
+                         {{1, 0, -1}, {0, 0, 2}, {0, 2, 0}, green}};   // right, -x
+  Mesh m;
+  for (const Wall& w : walls) {
+    const uint32_t base = uint32_t(m.positions.size());
+    for (int j = 0; j <= kGrid; ++j)
+      for (int i = 0; i <= kGrid; ++i)
+        m.positions.push_back(w.origin + w.du * (float(i) / kGrid) + w.dv * (float(j) / kGrid));
+    for (int j = 0; j < kGrid; ++j)
+      for (int i = 0; i < kGrid; ++i) {
+        const uint32_t v00 = base + uint32_t(j * (kGrid + 1) + i), v10 = v00 + 1, v01 = v00 + kGrid + 1,
+                       v11 = v01 + 1;
+        const uint32_t tris[2][3] = {{v00, v10, v11}, {v00, v11, v01}};
+        for (const auto& t : tris) {
+          m.indices.insert(m.indices.end(), {t[0], t[1], t[2]});
+          const Vec3f p0 = m.positions[t[0]], p1 = m.positions[t[1]], p2 = m.positions[t[2]];
+          m.face_normals.push_back(gdvr::normalize(gdvr::cross(p1 - p0, p2 - p0)));
+          m.offset_floors.push_back(std::min(
+              1.0f, std::max(gdvr::max_abs_component(p0),
+                             std::max(gdvr::max_abs_component(p1), gdvr::max_abs_component(p2)))));
+          m.albedo.push_back(w.albedo);
+        }
+      }
+  }
+  return m;
+}
+
+// Hits spread over the walls, reached from random points inside the box.
+std::vector<ScalarPath> make_paths(const Mesh& mesh, int count, uint64_t seed) {
   std::mt19937_64 gen(seed);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   std::vector<ScalarPath> paths(static_cast<size_t>(count));
-  const Vec3f normals[5] = {{0, 1, 0}, {0, -1, 0}, {1, 0, 0}, {-1, 0, 0}, {0, 0, 1}};
-  const Rgb albedos[3] = {{0.58f, 0.57f, 0.55f}, {0.63f, 0.065f, 0.05f}, {0.14f, 0.45f, 0.091f}};
+  const uint32_t triangles = uint32_t(mesh.face_normals.size());
   for (ScalarPath& st : paths) {
-    const int wall = int(u(gen) * 5) % 5;
-    const Vec3f n = normals[wall];
-    Vec3f p{u(gen) * 2 - 1, u(gen) * 2, u(gen) * 2 - 1};
-    if (n.y > 0) p.y = 0; else if (n.y < 0) p.y = 1.99f;
-    if (n.x > 0) p.x = -1; else if (n.x < 0) p.x = 1;
-    if (n.z > 0) p.z = -1;
-    // A ray towards p from a random point inside the box.
+    st.prim = std::min(triangles - 1, uint32_t(u(gen) * float(triangles)));
+    float b1 = u(gen), b2 = u(gen);
+    if (b1 + b2 > 1.0f) b1 = 1.0f - b1, b2 = 1.0f - b2;
+    st.b1 = b1, st.b2 = b2;
+    const uint32_t* ix = &mesh.indices[3 * st.prim];
+    const Vec3f p = mesh.positions[ix[0]] * (1.0f - b1 - b2) + mesh.positions[ix[1]] * b1 + mesh.positions[ix[2]] * b2;
     const Vec3f from{u(gen) * 1.6f - 0.8f, u(gen) * 1.6f + 0.2f, u(gen) * 1.6f - 0.8f};
     st.rng = gdvr::Pcg32(gen(), gen());
-    st.p = p, st.n = n, st.ray_d = gdvr::normalize(p - from), st.albedo = albedos[wall % 3];
+    st.ray_d = gdvr::normalize(p - from);
     st.throughput = Rgb(u(gen), u(gen), u(gen));
     st.depth = int(u(gen) * 8);
     st.alive = true;
@@ -465,9 +569,8 @@ void to_soa(const ScalarPath* in, SoaPaths* out) {
     uint64_t words[2];
     pcg_words(st.rng, words);
     out->rng_state[i] = words[0], out->rng_inc[i] = words[1];
-    put3(out->p, i, st.p.x, st.p.y, st.p.z), put3(out->n, i, st.n.x, st.n.y, st.n.z);
+    out->prim[i] = int32_t(st.prim), out->b1[i] = st.b1, out->b2[i] = st.b2;
     put3(out->ray_d, i, st.ray_d.x, st.ray_d.y, st.ray_d.z);
-    put3(out->albedo, i, st.albedo.r, st.albedo.g, st.albedo.b);
     put3(out->throughput, i, st.throughput.r, st.throughput.g, st.throughput.b);
     put3(out->shadow_o, i, 0, 0, 0), put3(out->shadow_d, i, 0, 0, 0), put3(out->contribution, i, 0, 0, 0);
     put3(out->next_o, i, 0, 0, 0), put3(out->next_d, i, 0, 0, 0);
@@ -501,8 +604,9 @@ double median(std::vector<double> v) {
 
 int main() {
   const Light light = cbox_light();
+  const Mesh mesh = cbox_walls();
   constexpr int kBatches = 256, kBounces = 4, kRuns = 15;
-  const std::vector<ScalarPath> initial = make_paths(kPaths * kBatches, 12345);
+  const std::vector<ScalarPath> initial = make_paths(mesh, kPaths * kBatches, 12345);
   std::vector<SoaPaths> soa_initial(kBatches);
   for (int bt = 0; bt < kBatches; ++bt) to_soa(&initial[size_t(bt) * kPaths], &soa_initial[size_t(bt)]);
   auto run_scalar = [&](std::vector<ScalarPath>* paths) {
@@ -511,19 +615,19 @@ int main() {
       for (int bounce = 0; bounce < kBounces; ++bounce)
         for (int i = 0; i < kPaths; ++i) {
           ScalarPath& st = (*paths)[size_t(bt) * kPaths + size_t(i)];
-          if (st.alive) scalar_vertex(light, &st), ++vertices;
+          if (st.alive) scalar_vertex(light, mesh, &st), ++vertices;
         }
     return vertices;
   };
   auto run_soa = [&](std::vector<SoaPaths>* soa) {
     for (int bt = 0; bt < kBatches; ++bt)
       for (int bounce = 0; bounce < kBounces; ++bounce)
-        for (int k = 0; k < kPaths; k += kLanes) simd_vertices(light, &(*soa)[size_t(bt)], k);
+        for (int k = 0; k < kPaths; k += kLanes) simd_vertices(light, mesh, &(*soa)[size_t(bt)], k);
   };
   auto run_gathered = [&](std::vector<ScalarPath>* paths) {
     for (int bt = 0; bt < kBatches; ++bt)
       for (int bounce = 0; bounce < kBounces; ++bounce)
-        for (int k = 0; k < kPaths; k += kLanes) simd_vertices_aos(light, &(*paths)[size_t(bt) * kPaths + size_t(k)]);
+        for (int k = 0; k < kPaths; k += kLanes) simd_vertices_aos(light, mesh, &(*paths)[size_t(bt) * kPaths + size_t(k)]);
   };
 
   // Same bits: kBounces vertices of every path in all three forms (paths
