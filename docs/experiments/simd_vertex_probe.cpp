@@ -26,6 +26,8 @@
 //       docs/experiments/simd_vertex_probe.cpp core/math/distribution.cpp core/math/alias_table.cpp
 //   ... -DLANES=8 -march=x86-64-v3      (AVX2)
 //   ... -DLANES=16 -march=x86-64-v4     (AVX-512)
+//   ... -DLANES=8 -DRECORDS -march=x86-64-v3 or -v4   (scene loads as whole
+//       per-triangle records, transposed, instead of gathers)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -62,8 +64,19 @@ constexpr int kRrDepth = 5;
 
 // ---------------------------------------------------------------- scalar form
 // The quad light: two triangles picked by a Distribution1D, as FrameScene does.
+// One cache line per triangle, for the vector form's RECORDS layout: what a
+// vertex reads of its triangle, loaded whole and transposed instead of
+// gathered field by field.
+struct alignas(64) TriangleRecord {
+  Vec3f p0, p1, p2, n;
+  Rgb albedo;  // unused for the light
+  float offset_floor;
+};
+static_assert(sizeof(TriangleRecord) == 16 * sizeof(float));
+
 struct Light {
   Vec3f p0[2], p1[2], p2[2], n[2];
+  TriangleRecord records[2];
   gdvr::Distribution1D triangles{std::vector<float>{1.0f, 1.0f}};
   float area;  // of the whole quad
   Rgb radiance;
@@ -77,6 +90,7 @@ struct Mesh {
   std::vector<Vec3f> positions, face_normals;
   std::vector<float> offset_floors;
   std::vector<Rgb> albedo;
+  std::vector<TriangleRecord> records;  // the same, one record per triangle
 };
 
 // What a vertex reads and writes, as PathState holds it (the fields used).
@@ -206,6 +220,39 @@ inline vf vmin(vf a, vf b) { return b < a ? b : a; }  // std::min(a, b)
 inline vf vsel(vi m, vf a, vf b) { return m ? a : b; }
 inline vi vsel(vi m, vi a, vi b) { return m ? a : b; }
 
+#if defined(RECORDS) && defined(__AVX2__) && LANES == 8
+constexpr bool kRecords = true;
+// Eight records of 16 floats, as 16 vectors of 8 lanes (two 8 x 8 transposes).
+inline void transpose8(__m256 r[8]) {
+  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+  const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
+  const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
+  const __m256 u0 = _mm256_shuffle_ps(t0, t2, 0x44), u1 = _mm256_shuffle_ps(t0, t2, 0xee);
+  const __m256 u2 = _mm256_shuffle_ps(t1, t3, 0x44), u3 = _mm256_shuffle_ps(t1, t3, 0xee);
+  const __m256 u4 = _mm256_shuffle_ps(t4, t6, 0x44), u5 = _mm256_shuffle_ps(t4, t6, 0xee);
+  const __m256 u6 = _mm256_shuffle_ps(t5, t7, 0x44), u7 = _mm256_shuffle_ps(t5, t7, 0xee);
+  r[0] = _mm256_permute2f128_ps(u0, u4, 0x20), r[1] = _mm256_permute2f128_ps(u1, u5, 0x20);
+  r[2] = _mm256_permute2f128_ps(u2, u6, 0x20), r[3] = _mm256_permute2f128_ps(u3, u7, 0x20);
+  r[4] = _mm256_permute2f128_ps(u0, u4, 0x31), r[5] = _mm256_permute2f128_ps(u1, u5, 0x31);
+  r[6] = _mm256_permute2f128_ps(u2, u6, 0x31), r[7] = _mm256_permute2f128_ps(u3, u7, 0x31);
+}
+struct RecordLanes {
+  __m256 f[16];  // field k of the eight records
+};
+inline void load_records(const TriangleRecord* records, const int32_t* index, RecordLanes* out) {
+  for (int i = 0; i < 8; ++i) {
+    const float* rec = &records[index[i]].p0.x;
+    out->f[i] = _mm256_load_ps(rec);
+    out->f[8 + i] = _mm256_load_ps(rec + 8);
+  }
+  transpose8(out->f);
+  transpose8(out->f + 8);
+}
+#else
+constexpr bool kRecords = false;
+#endif
+
 // base[idx[i]] in every lane: the hardware gather where the ISA has one
 // (AVX2, AVX-512), else lane by lane.
 inline vf gather(const float* base, vi idx) {
@@ -308,15 +355,29 @@ VOut simd_vertex_math(const Light& light, const Mesh& mesh, VIn in) {
   VV3 throughput = in.throughput;
 
   // The hit: the triangle's corners, normal, offset floor and reflectance,
-  // gathered.
+  // gathered field by field or (RECORDS) loaded as whole records.
+  VV3 c0, c1, c2, n, albedo;
+  vf offset_floor;
+#if defined(RECORDS) && defined(__AVX2__) && LANES == 8
+  {
+    int32_t prims[8];
+    for (int i = 0; i < 8; ++i) prims[i] = in.prim[i];
+    RecordLanes r;
+    load_records(mesh.records.data(), prims, &r);
+    auto f = [&r](int k) { return (vf)r.f[k]; };
+    c0 = {f(0), f(1), f(2)}, c1 = {f(3), f(4), f(5)}, c2 = {f(6), f(7), f(8)}, n = {f(9), f(10), f(11)};
+    albedo = {f(12), f(13), f(14)}, offset_floor = f(15);
+  }
+#else
   const int32_t* indices = reinterpret_cast<const int32_t*>(mesh.indices.data());
   const vi corner = in.prim * 3;
-  const VV3 c0 = gather3(mesh.positions.data(), gather(indices, corner));
-  const VV3 c1 = gather3(mesh.positions.data(), gather(indices, corner + 1));
-  const VV3 c2 = gather3(mesh.positions.data(), gather(indices, corner + 2));
-  const VV3 n = gather3(mesh.face_normals.data(), in.prim);
-  const VV3 albedo = gather3(mesh.albedo.data(), in.prim);
-  const vf offset_floor = gather(mesh.offset_floors.data(), in.prim);
+  c0 = gather3(mesh.positions.data(), gather(indices, corner));
+  c1 = gather3(mesh.positions.data(), gather(indices, corner + 1));
+  c2 = gather3(mesh.positions.data(), gather(indices, corner + 2));
+  n = gather3(mesh.face_normals.data(), in.prim);
+  albedo = gather3(mesh.albedo.data(), in.prim);
+  offset_floor = gather(mesh.offset_floors.data(), in.prim);
+#endif
   const VV3 p = c0 * (1.0f - in.b1 - in.b2) + c1 * in.b1 + c2 * in.b2;
 
   // Frame(n), Duff et al.
@@ -337,10 +398,20 @@ VOut simd_vertex_math(const Light& light, const Mesh& mesh, VIn in) {
   vd rest = scaled - __builtin_convertvector(ti, vd);
   rest = rest < 0.0 ? 0.0 : (double(0x1.fffffep-1f) < rest ? double(0x1.fffffep-1f) : rest);
   const vf u_tri = __builtin_convertvector(rest, vf);
-  // The light's triangle, gathered (a general light list is a gather).
+  // The light's triangle, gathered (a general light list is a gather), or
+  // (RECORDS) loaded as whole records.
   const vi light_tri = __builtin_convertvector(ti, vi);
+#if defined(RECORDS) && defined(__AVX2__) && LANES == 8
+  int32_t tris[8];
+  for (int i = 0; i < 8; ++i) tris[i] = light_tri[i];
+  RecordLanes lr;
+  load_records(light.records, tris, &lr);
+  auto lf = [&lr](int k) { return (vf)lr.f[k]; };
+  const VV3 p0{lf(0), lf(1), lf(2)}, p1{lf(3), lf(4), lf(5)}, p2{lf(6), lf(7), lf(8)}, tn{lf(9), lf(10), lf(11)};
+#else
   const VV3 p0 = gather3(light.p0, light_tri), p1 = gather3(light.p1, light_tri), p2 = gather3(light.p2, light_tri);
   const VV3 tn = gather3(light.n, light_tri);
+#endif
   const vf tt = safe_vsqrt(1.0f - u_tri);
   const vf b1 = 1.0f - tt, b2 = tt * uy;
   const VV3 lp = p0 * (1.0f - b1 - b2) + p1 * b1 + p2 * b2;
@@ -492,6 +563,7 @@ Light cbox_light() {
   l.n[0] = l.n[1] = Vec3f(0, -1, 0);
   l.area = (b.x - a.x) * (c.z - b.z);
   l.radiance = Rgb(17.0f, 12.0f, 4.0f);
+  for (int t = 0; t < 2; ++t) l.records[t] = {l.p0[t], l.p1[t], l.p2[t], l.n[t], Rgb(0.0f), 0.0f};
   return l;
 }
 
@@ -529,6 +601,7 @@ Mesh cbox_walls() {
               1.0f, std::max(gdvr::max_abs_component(p0),
                              std::max(gdvr::max_abs_component(p1), gdvr::max_abs_component(p2)))));
           m.albedo.push_back(w.albedo);
+          m.records.push_back({p0, p1, p2, m.face_normals.back(), w.albedo, m.offset_floors.back()});
         }
       }
   }
@@ -652,6 +725,7 @@ int main() {
     soa_mismatches += !ok || words[0] != sp.rng_state[i];
     gathered_mismatches += !same_path(st, gathered[j]);
   }
+  std::printf("%s", kRecords ? "scene loads: one record per triangle, transposed\n" : "");
   std::printf("lanes %d, %zu vertices of %zu paths; paths that differ from the scalar form: %zu (struct of arrays), %zu (gathered)\n",
               kLanes, vertices, scalar.size(), soa_mismatches, gathered_mismatches);
 
