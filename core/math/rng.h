@@ -44,6 +44,15 @@ class Pcg32 {
   // Uniform in [0, 1): 24 random mantissa bits, never returns 1.
   float next_float() { return static_cast<float>(next_u32() >> 8) * 0x1p-24f; }
 
+  // The generator's two words, for code that advances many generators at
+  // once in vector registers (diffuse_batch.cpp) and hands them back.
+  uint64_t state() const { return state_; }
+  uint64_t increment() const { return inc_; }
+  void restore(uint64_t state, uint64_t increment) {
+    state_ = state;
+    inc_ = increment;
+  }
+
  private:
   uint64_t state_ = 0, inc_ = 0;
 };
@@ -69,6 +78,8 @@ class Sampler {
     float a = next_1d();
     return {a, next_1d()};
   }
+  Pcg32& generator() { return rng_; }
+  const Pcg32& generator() const { return rng_; }
 
  private:
   Pcg32 rng_;

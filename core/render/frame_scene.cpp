@@ -103,8 +103,11 @@ Expected<std::unique_ptr<FrameScene>> FrameScene::create(const Scene& scene, con
   }
   GDVR_RETURN_IF_ERROR(fs->accel_->commit());
   GDVR_RETURN_IF_ERROR(fs->prepare_emitters());
+  fs->diffuse_ = DiffuseScene::build(*fs, &fs->why_not_diffuse_);
   return fs;
 }
+
+FrameScene::~FrameScene() = default;
 
 Status FrameScene::build_shape_state(size_t i, bool animated) {
   const Shape& shape = scene_.shapes[i];
@@ -250,7 +253,9 @@ Status FrameScene::update(const Scene& scene) {
   if (moved) GDVR_RETURN_IF_ERROR(accel_->commit());
   scene_.emitters = scene.emitters;
   scene_.camera = scene.camera;
-  return prepare_emitters();
+  GDVR_RETURN_IF_ERROR(prepare_emitters());
+  if (diffuse_) diffuse_->refresh_emitters(*this);
+  return Status::Ok();
 }
 
 // Mitsuba's smooth shading normal (shading_normal() has ruled out the flat case).

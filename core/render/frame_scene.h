@@ -5,12 +5,14 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "core/accel/accelerator.h"
 #include "core/math/bounds.h"
 #include "core/math/distribution.h"
 #include "core/math/rng.h"
+#include "core/render/diffuse_scene.h"
 #include "core/render/ray.h"
 #include "core/scene/scene.h"
 
@@ -42,6 +44,7 @@ class FrameScene {
   // `animated_shapes[i]` marks shapes whose transform changes during the job
   // (they are instanced). May be empty: nothing animates.
   static Expected<std::unique_ptr<FrameScene>> create(const Scene& scene, const std::vector<bool>& animated_shapes);
+  ~FrameScene();
 
   // Takes the transforms of animated shapes, all emitters and the camera from
   // `scene` (the same scene after apply_animation).
@@ -110,7 +113,15 @@ class FrameScene {
   // spot and directional lights are never hit by a ray).
   std::vector<Bounds3f> area_emitter_bounds() const;
 
+  // ---- The diffuse path batch (diffuse_batch.h) ----
+  // The scene as per-triangle records, where every surface is diffuse and
+  // every emitter an area light on a flat mesh; else null, and
+  // why_not_diffuse() names what the scene has that the records cannot hold.
+  const DiffuseScene* diffuse_scene() const { return diffuse_.get(); }
+  const std::string& why_not_diffuse() const { return why_not_diffuse_; }
+
  private:
+  friend class DiffuseScene;  // reads ShapeState to lay out its records
   struct ShapeState {
     std::shared_ptr<const TriangleMesh> mesh;  // world space if !instanced
     std::vector<Vec3f> face_normals;           // unit, same space as `mesh` (saves a cross + sqrt per hit)
@@ -175,6 +186,8 @@ class FrameScene {
   std::vector<ShapeState> shapes_;
   std::vector<Envmap> envmaps_;  // parallel to scene_.emitters (empty unless envmap)
   int environment_ = -1;         // index of the constant/envmap emitter
+  std::unique_ptr<DiffuseScene> diffuse_;
+  std::string why_not_diffuse_;
 };
 
 }  // namespace gdvr

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/render/diffuse_batch.h"
+
 namespace gdvr {
 namespace {
 
@@ -27,14 +29,10 @@ inline void sample_bsdf_stage(const PathTracerSettings& settings, PathState* pat
   for (int k = 0; k < n; ++k) sample_bsdf_drawn(settings, &paths[which[k]], slot[k] >= 0 ? &slopes[slot[k]] : nullptr);
 }
 
-[[gnu::flatten]] void trace_at_most_one_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
-                             RayStream& stream, PathCounters& counters, PathSample* out) {
-  int live[kPathBatch], shadowed[kPathBatch];
-  int count = 0;
-  for (int i = 0; i < n; ++i) {
-    prefetch_for_next_vertex(scene, paths[i]);
-    live[count++] = i;
-  }
+// Advances paths[live[0..count)], whose rays are set, to their ends.
+[[gnu::flatten]] void run_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths,
+                                int* live, int count, RayStream& stream, PathCounters& counters) {
+  int shadowed[kPathBatch];
   cast_closest_stream(scene, settings, paths, live, count, stream, counters);
   while (count > 0) {
     // Each stage is its own loop: its body is short enough that the core runs
@@ -63,10 +61,25 @@ inline void sample_bsdf_stage(const PathTracerSettings& settings, PathState* pat
     if (pending > 0) cast_shadow_stream_and_resolve(scene, paths, shadowed, pending, stream, counters);
     if (count > 0) cast_closest_stream(scene, settings, paths, live, count, stream, counters);
   }
+}
+
+void trace_at_most_one_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
+                             RayStream& stream, PathCounters& counters, PathSample* out) {
+  int live[kPathBatch];
+  for (int i = 0; i < n; ++i) {
+    prefetch_for_next_vertex(scene, paths[i]);
+    live[i] = i;
+  }
+  run_batch(scene, settings, paths, live, n, stream, counters);
   for (int i = 0; i < n; ++i) out[i] = finish_path(paths[i], counters);
 }
 
 }  // namespace
+
+void continue_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int* live,
+                         int count, RayStream& stream, PathCounters& counters) {
+  run_batch(scene, settings, paths, live, count, stream, counters);
+}
 
 void trace_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                       PathCounters& counters, PathSample* out) {
@@ -85,8 +98,12 @@ void trace_tile_samples(const FrameScene& scene, const PathTracerSettings& setti
   RayStream stream;
   int px[kPathBatch], py[kPathBatch];
   int n = 0;
+  // A full batch of a diffuse scene goes to the vector kernel; one path at a
+  // time (a benchmark's baseline) stays scalar.
+  const bool diffuse = settings.vector_kernels && batch == kPathBatch && diffuse_batch_available(scene);
   auto flush = [&] {
-    trace_at_most_one_batch(scene, settings, paths, n, stream, counters, out);
+    if (diffuse) trace_diffuse_batch(scene, settings, paths, n, stream, counters, out);
+    else trace_at_most_one_batch(scene, settings, paths, n, stream, counters, out);
     for (int i = 0; i < n; ++i) add(px[i], py[i], out[i]);
     n = 0;
   };

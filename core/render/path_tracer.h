@@ -17,6 +17,10 @@ struct PathTracerSettings {
   int max_depth = -1;
   int rr_depth = 5;
   bool hide_emitters = false;
+  // The diffuse batch's AVX2 kernel where the scene and the CPU allow it
+  // (diffuse_batch.h). Off: the scalar batch, which gives the same image bit
+  // for bit (tests and benchmarks compare the two).
+  bool vector_kernels = true;
 };
 
 // A ray as traced, for benchmarks that replay the path tracer's exact ray

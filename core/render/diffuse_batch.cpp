@@ -1,0 +1,177 @@
+#include "core/render/diffuse_batch.h"
+
+#include "core/render/path_batch.h"
+
+namespace gdvr {
+namespace {
+
+static_assert(kDiffuseBatch == kPathBatch, "the diffuse batch takes the path batch's paths");
+
+Vec3f lane3(const float (*a)[kDiffuseBatch], int i) { return {a[0][i], a[1][i], a[2][i]}; }
+Rgb lane_rgb(const float (*a)[kDiffuseBatch], int i) { return {a[0][i], a[1][i], a[2][i]}; }
+void set_lane(float (*a)[kDiffuseBatch], int i, Vec3f v) { a[0][i] = v.x, a[1][i] = v.y, a[2][i] = v.z; }
+void set_lane(float (*a)[kDiffuseBatch], int i, Rgb c) { a[0][i] = c.r, a[1][i] = c.g, a[2][i] = c.b; }
+
+Ray ray_of(const DiffuseBatchState& s, int i) { return {lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]}; }
+Ray shadow_ray_of(const DiffuseBatchState& s, int i) {
+  return {lane3(s.shadow_o, i), lane3(s.shadow_d, i), 0.0f, s.shadow_tmax[i]};
+}
+
+// The state start_path() left in paths[0..n), field by field.
+void load_paths(const PathState* paths, int n, DiffuseBatchState* s) {
+  for (int i = 0; i < kDiffuseBatch; ++i) s->shade[i] = s->continues[i] = s->shadow_pending[i] = 0;
+  for (int i = 0; i < n; ++i) {
+    const PathState& st = paths[i];
+    s->rng_state[i] = st.sampler.generator().state();
+    s->rng_inc[i] = st.sampler.generator().increment();
+    set_lane(s->o, i, st.ray.o);
+    set_lane(s->d, i, st.ray.d);
+    s->tmin[i] = st.ray.tmin;
+    s->tmax[i] = st.ray.tmax;
+    set_lane(s->throughput, i, st.throughput);
+    set_lane(s->result, i, st.result);
+    set_lane(s->direct, i, st.direct);
+    set_lane(s->prev_p, i, st.prev_p);
+    s->prev_pdf[i] = st.prev_bsdf_pdf;
+    s->prev_delta[i] = st.prev_bsdf_delta ? -1 : 0;
+    s->depth[i] = st.depth;
+  }
+}
+
+// Lane i's whole state back into its PathState, for the scalar stages.
+void store_path(const DiffuseBatchState& s, int i, PathState* st) {
+  st->sampler.generator().restore(s.rng_state[i], s.rng_inc[i]);
+  st->ray = ray_of(s, i);
+  st->throughput = lane_rgb(s.throughput, i);
+  st->result = lane_rgb(s.result, i);
+  st->direct = lane_rgb(s.direct, i);
+  st->prev_p = lane3(s.prev_p, i);
+  st->prev_bsdf_pdf = s.prev_pdf[i];
+  st->prev_bsdf_delta = s.prev_delta[i] != 0;
+  st->depth = s.depth[i];
+  st->shadow_pending = false;
+}
+
+// log_stream() for lanes which[0..n).
+void log_lanes(const DiffuseBatchState& s, const int* which, int n, bool shadow, RayCoherence coherence,
+               PathCounters& counters) {
+  if (!counters.ray_log) {
+    counters.rays += uint64_t(n);
+    return;
+  }
+  const uint32_t stream = ++counters.streams_logged;
+  for (int k = 0; k < n; ++k)
+    log_ray(shadow ? shadow_ray_of(s, which[k]) : ray_of(s, which[k]), shadow, GeometrySet::kAll, stream, counters,
+            coherence);
+}
+
+// add_emission() for lane i, whose ray hit an emitter: through a PathState,
+// so that the sums come out as the scalar stage leaves them. Scalar: a few
+// per cent of hits, and it needs the emitter's own pdf.
+void add_emission_on_lane(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* s, int i,
+                          const RayHit& hit, PathState* scratch) {
+  scratch->ray = ray_of(*s, i);
+  scratch->hit = true;
+  scratch->blocked = false;
+  scene.interaction(scratch->ray, hit, &scratch->si);
+  scratch->depth = s->depth[i];
+  scratch->throughput = lane_rgb(s->throughput, i);
+  scratch->result = lane_rgb(s->result, i);
+  scratch->direct = lane_rgb(s->direct, i);
+  scratch->prev_p = lane3(s->prev_p, i);
+  scratch->prev_bsdf_pdf = s->prev_pdf[i];
+  scratch->prev_bsdf_delta = s->prev_delta[i] != 0;
+  add_emission(scene, settings, scratch);
+  set_lane(s->result, i, scratch->result);
+  set_lane(s->direct, i, scratch->direct);
+}
+
+}  // namespace
+
+bool diffuse_batch_available(const FrameScene& scene) {
+#if defined(GDVR_AVX2_KERNELS)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  return avx2 && scene.diffuse_scene() != nullptr;
+#else
+  (void)scene;
+  return false;
+#endif
+}
+
+void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
+                         RayStream& stream, PathCounters& counters, PathSample* out) {
+  DiffuseSceneView view = scene.diffuse_scene()->view();
+  view.rr_depth = settings.rr_depth;
+  DiffuseBatchState s;
+  load_paths(paths, n, &s);
+  int live[kPathBatch], shadowed[kPathBatch];
+  int count = n;
+  for (int i = 0; i < n; ++i) live[i] = i;
+  PathState scratch;
+  // The batch's paths take their vertices in step (path_batch.cpp), so the
+  // live ones share one depth.
+  const int last = last_vertex_depth(settings);
+  for (int depth = 0; count > 0 && depth < last; ++depth) {
+    // ---- Closest hits: one stream, as cast_inner_stream ----
+    const RayCoherence coherence = depth == 0 ? RayCoherence::kCoherent : RayCoherence::kIncoherent;
+    log_lanes(s, live, count, false, coherence, counters);
+    for (int k = 0; k < count; ++k) {
+      const int i = live[k];
+      stream.set(k, lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]);
+    }
+    scene.accelerator().intersect_stream(stream, count, GeometrySet::kAll, coherence);
+    for (int k = 0; k < count; ++k) {
+      const int i = live[k];
+      if (!stream.found(k)) continue;  // no environment: nothing is seen, the path ends
+      const RayHit hit = stream.hit(k);
+      s.hit_shape[i] = hit.id;
+      s.hit_prim[i] = int32_t(hit.prim);
+      s.hit_u[i] = hit.u;
+      s.hit_v[i] = hit.v;
+      s.hit_t[i] = hit.t;
+      s.shade[i] = -1;
+      if (scene.emitter_of_shape(hit.id) >= 0 && !(depth == 0 && settings.hide_emitters))
+        add_emission_on_lane(scene, settings, &s, i, hit, &scratch);
+    }
+
+    // ---- Eight paths' vertices at a time ----
+#if defined(GDVR_AVX2_KERNELS)
+    shade_diffuse_vertices_avx2(view, &s);
+#endif
+
+    // ---- Shadow rays as one stream, then the paths that go on (in order) ----
+    int pending = 0, next = 0;
+    for (int k = 0; k < count; ++k) {
+      const int i = live[k];
+      if (!s.shade[i]) continue;
+      s.shade[i] = 0;
+      if (s.shadow_pending[i]) shadowed[pending++] = i;
+      if (s.continues[i]) live[next++] = i;
+    }
+    if (pending > 0) {
+      log_lanes(s, shadowed, pending, true, RayCoherence::kIncoherent, counters);
+      for (int k = 0; k < pending; ++k) {
+        const int i = shadowed[k];
+        stream.set(k, lane3(s.shadow_o, i), lane3(s.shadow_d, i), 0.0f, s.shadow_tmax[i]);
+      }
+      scene.accelerator().occluded_stream(stream, pending);
+      for (int k = 0; k < pending; ++k) {
+        const int i = shadowed[k];
+        s.shadow_pending[i] = 0;
+        if (!stream.occluded(k)) set_lane(s.result, i, lane_rgb(s.result, i) + lane_rgb(s.shadow_contribution, i));
+      }
+    }
+    count = next;
+  }
+
+  // ---- Hand over: every path's sums; the live paths' last ray to the scalar stages ----
+  for (int i = 0; i < n; ++i) {
+    paths[i].result = lane_rgb(s.result, i);
+    paths[i].direct = lane_rgb(s.direct, i);
+  }
+  for (int k = 0; k < count; ++k) store_path(s, live[k], &paths[live[k]]);
+  if (count > 0) continue_path_batch(scene, settings, paths, live, count, stream, counters);
+  for (int i = 0; i < n; ++i) out[i] = finish_path(paths[i], counters);
+}
+
+}  // namespace gdvr

@@ -1,0 +1,27 @@
+// The path batch (path_batch.h) for a scene that FrameScene laid out as
+// diffuse records (diffuse_scene.h): the paths' state as struct of arrays,
+// each vertex shaded eight paths at a time by an AVX2 kernel
+// (diffuse_vertex_avx2.cpp), the rays cast as the scalar batch casts them.
+// Every path's radiance is the scalar batch's bit for bit, so an image does
+// not depend on which CPU rendered it. Paths hand over to the scalar stages
+// for what the kernel leaves out: emission seen along a ray (a few per cent
+// of hits, scalar either way) and the last ray under max_depth.
+//
+// On cbox this made the path tracer's own code per ray about 2x faster
+// (docs/foundation.md, sixteenth round).
+#pragma once
+
+#include "core/render/path_stages.h"
+
+namespace gdvr {
+
+// Whether trace_diffuse_batch can run: `scene` has diffuse records and this
+// CPU has AVX2.
+bool diffuse_batch_available(const FrameScene& scene);
+
+// trace_path_batch's work for paths[0..n) (n <= kPathBatch, all at depth 0):
+// out[i] is path i's sample, as the scalar batch gives it.
+void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
+                         RayStream& stream, PathCounters& counters, PathSample* out);
+
+}  // namespace gdvr

@@ -1,0 +1,97 @@
+// What the vector kernel of the diffuse path batch (diffuse_batch.h) reads
+// and writes: the scene as one 64-byte record per triangle, and a batch of
+// paths as struct of arrays (one array per field, a lane per path), so that
+// eight paths' fields load as one AVX2 vector.
+//
+// Plain data only. The kernel (diffuse_vertex_avx2.cpp) is compiled for AVX2
+// and runs only where the CPU has it; an inline function it shared with the
+// rest of gdvr could be emitted in its AVX2 form and picked by the linker for
+// callers on any CPU. So nothing here has code, and the kernel keeps its own.
+#pragma once
+
+#include <cstdint>
+
+namespace gdvr {
+
+class Distribution1D;
+
+// Paths in a diffuse batch (== kPathBatch: path_batch.cpp hands its batches over).
+constexpr int kDiffuseBatch = 64;
+
+// A triangle of a static mesh with a constant diffuse BSDF: what a vertex on
+// it reads, in one cache line (with gathers of indices, corners, normal,
+// offset floor and reflectance field by field, AVX2 gained a fifth less:
+// docs/experiments/README.md).
+struct alignas(64) DiffuseTriangleRecord {
+  float p0[3], p1[3], p2[3];  // world-space corners
+  float n[3];                 // unit face normal, flip_normals applied
+  float albedo[3];            // the diffuse reflectance
+  // SurfaceInteraction::offset_floor (never negative), its sign bit set where
+  // the triangle shades with interpolated vertex normals (SmoothNormalsRecord)
+  // rather than with its face normal.
+  float offset_floor;
+};
+static_assert(sizeof(DiffuseTriangleRecord) == 64);
+
+// The vertex normals of a triangle that interpolates them (world space,
+// before flip_normals), at the same index as its DiffuseTriangleRecord.
+struct alignas(64) SmoothNormalsRecord {
+  float n0[3], n1[3], n2[3];
+  float flip;  // -1 with flip_normals, else 1
+  float unused[6];
+};
+static_assert(sizeof(SmoothNormalsRecord) == 64);
+
+// A triangle of an area emitter, with its emitter's radiance and total area.
+struct alignas(64) EmitterTriangleRecord {
+  float p0[3], p1[3], p2[3];
+  float n[3];  // unit face normal, flip_normals applied
+  float radiance[3];
+  float area;  // the emitter shape's whole area
+};
+static_assert(sizeof(EmitterTriangleRecord) == 64);
+
+// The scene as the kernel sees it (pointers into DiffuseScene's arrays).
+struct DiffuseSceneView {
+  const DiffuseTriangleRecord* triangles = nullptr;
+  const SmoothNormalsRecord* smooth_normals = nullptr;  // null when every triangle is flat
+  const uint32_t* shape_first = nullptr;  // shape id -> its first record
+  const EmitterTriangleRecord* emitter_triangles = nullptr;
+  const uint32_t* emitter_first = nullptr;  // emitter -> its first emitter record
+  // emitter -> its triangles' area distribution (FrameScene's, so the same
+  // index and remapped number for the same u).
+  const Distribution1D* const* emitter_choice = nullptr;
+  uint32_t emitter_count = 0;
+  float select_pdf = 0;  // 1 / emitter_count, as FrameScene computes it
+  int rr_depth = 0;
+};
+
+// kDiffuseBatch paths, field by field. The driver fills the ray, the hit and
+// `shade`; the kernel shades the lanes marked in `shade` and leaves the
+// others as they were.
+struct alignas(64) DiffuseBatchState {
+  uint64_t rng_state[kDiffuseBatch], rng_inc[kDiffuseBatch];  // the path's Pcg32
+  alignas(64) float o[3][kDiffuseBatch], d[3][kDiffuseBatch];   // the ray traced next
+  alignas(64) float tmin[kDiffuseBatch], tmax[kDiffuseBatch];
+  alignas(64) float throughput[3][kDiffuseBatch], result[3][kDiffuseBatch], direct[3][kDiffuseBatch];
+  alignas(64) float prev_p[3][kDiffuseBatch], prev_pdf[kDiffuseBatch];
+  alignas(64) int32_t prev_delta[kDiffuseBatch], depth[kDiffuseBatch];
+  // The closest hit of the ray (shape id, triangle, barycentrics, distance).
+  alignas(64) int32_t hit_shape[kDiffuseBatch], hit_prim[kDiffuseBatch];
+  alignas(64) float hit_u[kDiffuseBatch], hit_v[kDiffuseBatch], hit_t[kDiffuseBatch];
+  alignas(64) int32_t shade[kDiffuseBatch];      // in: -1 shades this lane's vertex, 0 leaves it
+  alignas(64) int32_t continues[kDiffuseBatch];  // out: -1 where the path has a next ray
+  // Out: next-event estimation waiting for its shadow ray.
+  alignas(64) float shadow_o[3][kDiffuseBatch], shadow_d[3][kDiffuseBatch], shadow_tmax[kDiffuseBatch];
+  alignas(64) float shadow_contribution[3][kDiffuseBatch];
+  alignas(64) int32_t shadow_pending[kDiffuseBatch];  // -1 or 0
+};
+
+// One diffuse vertex for every lane marked in state->shade: the hit's
+// shading, next-event estimation towards the area emitters, the cosine-
+// weighted bounce and Russian roulette, with path_stages.h's arithmetic in
+// its order, so every lane comes out bit for bit as sample_emitter,
+// connect_emitter and sample_bsdf leave a PathState. AVX2 only.
+void shade_diffuse_vertices_avx2(const DiffuseSceneView& scene, DiffuseBatchState* state);
+
+}  // namespace gdvr

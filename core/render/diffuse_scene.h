@@ -1,0 +1,49 @@
+// A scene whose every surface is a static triangle mesh with a one-sided
+// diffuse BSDF of constant reflectance, lit only by area emitters on
+// such meshes (Cornell boxes, architectural interiors), laid out for the
+// diffuse path batch's vector kernel (diffuse_batch.h): one 64-byte record
+// per triangle instead of the index buffer, three corners and four
+// per-triangle tables that a vertex otherwise reads.
+//
+// FrameScene builds it where the scene allows and says why not elsewhere;
+// everything else keeps the general path tracer.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/render/diffuse_batch_state.h"
+
+namespace gdvr {
+
+class FrameScene;
+
+class DiffuseScene {
+ public:
+  // The records of `scene`, or null with `why_not` naming the first thing
+  // the scene has that they cannot hold.
+  static std::unique_ptr<DiffuseScene> build(const FrameScene& scene, std::string* why_not);
+  // Re-reads the emitters' placement and radiance after FrameScene::update.
+  void refresh_emitters(const FrameScene& scene);
+
+  const DiffuseSceneView& view() const { return view_; }
+  size_t memory_bytes() const;
+
+  // Beyond this many triangles the records (64 or 128 bytes each) are not built.
+  static constexpr size_t kMaxTriangles = size_t(1) << 20;
+
+ private:
+  DiffuseScene() = default;
+  void update_view();
+
+  std::vector<DiffuseTriangleRecord> triangles_;
+  std::vector<SmoothNormalsRecord> smooth_normals_;  // parallel to triangles_, or empty if all are flat
+  std::vector<uint32_t> shape_first_;
+  std::vector<EmitterTriangleRecord> emitter_triangles_;
+  std::vector<uint32_t> emitter_first_;
+  std::vector<const Distribution1D*> emitter_choice_;
+  DiffuseSceneView view_;
+};
+
+}  // namespace gdvr

@@ -1,0 +1,213 @@
+// The diffuse path batch (core/render/diffuse_batch.h) against the scalar
+// batch: on scenes that FrameScene lays out as diffuse records, every path's
+// radiance must be the same bit for bit, through the same rays cast in the
+// same streams, whatever max_depth, Russian roulette depth and emitter
+// visibility; and scenes that do not fit must say why.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/render/diffuse_batch.h"
+#include "core/render/path_batch.h"
+#include "core/render/pt_integrator.h"
+#include "tests/core/gradient/gpt_test_util.h"
+
+namespace gdvr {
+namespace {
+
+using test::load_test_scene;
+
+constexpr int kW = 24, kH = 20;
+
+bool same_bits(const Rgb& a, const Rgb& b) { return std::memcmp(&a, &b, sizeof(Rgb)) == 0; }
+
+bool same_ray(const RecordedRay& a, const RecordedRay& b) {
+  return std::memcmp(&a.ray, &b.ray, sizeof(Ray)) == 0 && a.shadow == b.shadow && a.emitters_only == b.emitters_only &&
+         a.coherent == b.coherent && a.stream == b.stream;
+}
+
+// A room (an inward-facing cube) lit by two area emitters: a fan of triangles
+// of unequal areas (so that picking a triangle searches the distribution)
+// and a flipped rectangle; a black panel and a red one stand in it.
+std::unique_ptr<FrameScene> load_room(Scene* desc) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "gdvr_diffuse_batch_test";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream obj(dir / "fan.obj");
+    obj << "v 0 0.95 0\nv 0.5 0.95 0\nv 0.1 0.95 0.3\nv -0.4 0.95 0.2\nv -0.2 0.95 -0.5\n"
+           "f 1 3 2\nf 1 4 3\nf 1 5 4\nf 1 2 5\n";
+  }
+  const std::string xml = R"(<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="8"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="70"/>
+    <transform name="to_world"><lookat origin="0, 0, -0.9" target="0, 0, 1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
+  </sensor>
+  <bsdf type="diffuse" id="wall"><rgb name="reflectance" value="0.8, 0.7, 0.6"/></bsdf>
+  <shape type="cube"><boolean name="flip_normals" value="true"/><ref id="wall"/></shape>
+  <shape type="obj">
+    <string name="filename" value="fan.obj"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="6, 5, 4"/></emitter>
+  </shape>
+  <shape type="rectangle">
+    <boolean name="flip_normals" value="true"/>
+    <transform name="to_world"><scale value="0.2"/><rotate y="1" angle="90"/><translate x="0.9" y="-0.3" z="0.4"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.9, 0.3"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="1, 3, 9"/></emitter>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.3"/><translate x="-0.3" y="-0.2" z="0.5"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.25"/><rotate x="1" angle="70"/><translate x="0.3" y="-0.6" z="0.2"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.9, 0, 0"/></bsdf>
+  </shape>
+</scene>)";
+  auto loaded = load_mitsuba_scene_from_string(xml, dir.string(), LoadOptions{});
+  EXPECT_TRUE(loaded.ok()) << loaded.status().to_string();
+  if (!loaded.ok()) return nullptr;
+  *desc = std::move(loaded.value());
+  auto fs = FrameScene::create(*desc, {});
+  EXPECT_TRUE(fs.ok()) << fs.status().to_string();
+  return fs.ok() ? std::move(fs.value()) : nullptr;
+}
+
+TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
+  auto cbox = load_test_scene("cbox", kW, kH);
+  ASSERT_TRUE(cbox);
+  EXPECT_NE(cbox->scene->diffuse_scene(), nullptr) << cbox->scene->why_not_diffuse();
+  EXPECT_GT(cbox->scene->diffuse_scene()->memory_bytes(), 0u);
+  Scene room_desc;
+  auto room = load_room(&room_desc);
+  ASSERT_TRUE(room);
+  EXPECT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+
+  auto veach = load_test_scene("veach-mis", kW, kH);
+  ASSERT_TRUE(veach);
+  EXPECT_EQ(veach->scene->diffuse_scene(), nullptr);
+  EXPECT_NE(veach->scene->why_not_diffuse().find("shape"), std::string::npos) << veach->scene->why_not_diffuse();
+  auto matpreview = load_test_scene("matpreview", kW, kH);
+  ASSERT_TRUE(matpreview);
+  EXPECT_EQ(matpreview->scene->diffuse_scene(), nullptr);
+  EXPECT_NE(matpreview->scene->why_not_diffuse().find("not an area emitter"), std::string::npos)
+      << matpreview->scene->why_not_diffuse();
+}
+
+struct Variant {
+  int max_depth, rr_depth;
+  bool hide_emitters;
+  // Of the paths, at least this fraction carry light (the comparison is not
+  // one of black paths). max_depth 1 sees emitters only directly: it checks
+  // the hand-over to the scalar stages before any vertex, and its rays.
+  float lit_fraction;
+};
+
+// Four consecutive samples per pixel, as trace_tile_samples starts them, of
+// pixels spread over the image.
+void start_paths(const FrameScene& scene, int w, int h, int n, std::vector<PathState>* paths) {
+  PerspectiveCamera camera(scene.scene().camera, w, h);
+  paths->resize(size_t(n));
+  for (int i = 0; i < n; ++i) {
+    const int pixel = (i / 4 * 37) % (w * h), x = pixel % w, y = pixel / w;
+    Sampler sampler(42, 3, uint32_t(x), uint32_t(y), uint32_t(i % 4));
+    const Vec2f j = sampler.next_2d();
+    start_path(&(*paths)[size_t(i)], camera.generate_ray({float(x) + j.x, float(y) + j.y}), sampler);
+  }
+}
+
+// Batches of 64 paths and a partial one, vector against scalar.
+void expect_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h) {
+  PathTracerSettings settings;
+  settings.max_depth = v.max_depth;
+  settings.rr_depth = v.rr_depth;
+  settings.hide_emitters = v.hide_emitters;
+  const std::string what = "max_depth " + std::to_string(v.max_depth) + ", rr_depth " + std::to_string(v.rr_depth) +
+                           (v.hide_emitters ? ", emitters hidden" : "");
+  constexpr int kPaths = 3 * kPathBatch + 23;
+  std::vector<PathState> scalar_paths, vector_paths;
+  start_paths(scene, w, h, kPaths, &scalar_paths);
+  start_paths(scene, w, h, kPaths, &vector_paths);
+  std::vector<PathSample> scalar(kPaths), vector(kPaths);
+  std::vector<RecordedRay> scalar_log, vector_log;
+  PathCounters scalar_counters, vector_counters;
+  scalar_counters.ray_log = &scalar_log;
+  vector_counters.ray_log = &vector_log;
+  trace_path_batch(scene, settings, scalar_paths.data(), kPaths, scalar_counters, scalar.data());
+  RayStream stream;
+  for (int base = 0; base < kPaths; base += kPathBatch)
+    trace_diffuse_batch(scene, settings, vector_paths.data() + base, std::min(kPathBatch, kPaths - base), stream,
+                        vector_counters, vector.data() + base);
+  int nonzero = 0, differ = 0;
+  for (int i = 0; i < kPaths; ++i) {
+    const bool same = same_bits(scalar[size_t(i)].radiance, vector[size_t(i)].radiance) &&
+                      same_bits(scalar[size_t(i)].direct, vector[size_t(i)].direct);
+    if (!same && differ++ < 5)
+      ADD_FAILURE() << what << ": path " << i << " scalar (" << scalar[size_t(i)].radiance.r << ", "
+                    << scalar[size_t(i)].radiance.g << ", " << scalar[size_t(i)].radiance.b << ") vector ("
+                    << vector[size_t(i)].radiance.r << ", " << vector[size_t(i)].radiance.g << ", "
+                    << vector[size_t(i)].radiance.b << ")";
+    nonzero += !scalar[size_t(i)].radiance.is_black();
+  }
+  EXPECT_EQ(differ, 0) << what;
+  EXPECT_GE(nonzero, int(v.lit_fraction * kPaths)) << what;
+  EXPECT_EQ(scalar_counters.rays, vector_counters.rays) << what;
+  EXPECT_EQ(scalar_counters.streams_logged, vector_counters.streams_logged) << what;
+  ASSERT_EQ(scalar_log.size(), vector_log.size()) << what;
+  for (size_t k = 0; k < scalar_log.size(); ++k)
+    ASSERT_TRUE(same_ray(scalar_log[k], vector_log[k])) << what << ": ray " << k;
+}
+
+const Variant kVariants[] = {
+    {-1, 5, true, 0.5f}, {6, 5, true, 0.5f},  {6, 5, false, 0.5f}, {1, 5, false, 0.0f},
+    {2, 5, true, 0.2f},  {3, 1, false, 0.4f}, {12, 2, true, 0.5f},
+};
+
+TEST(DiffuseBatchTest, CboxPathsMatchTheScalarBatchBitForBit) {
+  auto ts = load_test_scene("cbox", kW, kH);
+  ASSERT_TRUE(ts);
+  if (!diffuse_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*ts->scene, v, kW, kH);
+}
+
+TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
+  Scene desc;
+  auto room = load_room(&desc);
+  ASSERT_TRUE(room);
+  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
+}
+
+// The whole renderer: an image with the vector kernel is the scalar one's.
+TEST(DiffuseBatchTest, RenderIsTheSameWithAndWithoutTheVectorKernel) {
+  auto ts = load_test_scene("cbox", kW, kH);
+  ASSERT_TRUE(ts);
+  if (!diffuse_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  FrameRenderSettings rs = ts->render;
+  rs.spp = 8;
+  rs.seed = 5;
+  rs.threads = 2;
+  std::vector<FrameRenderResult> results;
+  for (bool vector : {false, true}) {
+    rs.path.vector_kernels = vector;
+    auto r = render_frame_pt(*ts->scene, rs, 0, {});
+    ASSERT_TRUE(r.ok()) << r.status().to_string();
+    results.push_back(std::move(r.value()));
+  }
+  EXPECT_EQ(results[0].rays, results[1].rays);
+  ASSERT_EQ(results[0].color.data().size(), results[1].color.data().size());
+  EXPECT_EQ(0, std::memcmp(results[0].color.data().data(), results[1].color.data().data(),
+                           results[0].color.data().size() * sizeof(float)));
+  EXPECT_EQ(0, std::memcmp(results[0].variance.data().data(), results[1].variance.data().data(),
+                           results[0].variance.data().size() * sizeof(float)));
+}
+
+}  // namespace
+}  // namespace gdvr
