@@ -98,6 +98,14 @@ bool diffuse_batch_available(const FrameScene& scene) {
 #endif
 }
 
+std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, int paths_in_flight) {
+  if (!settings.vector_kernels) return "vector kernels are switched off";
+  if (paths_in_flight < kPathBatch) return "paths are traced " + std::to_string(paths_in_flight) + " at a time";
+  if (!scene.diffuse_scene()) return scene.why_not_diffuse();
+  if (!diffuse_batch_available(scene)) return "this CPU has no AVX2";
+  return "";
+}
+
 void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                          RayStream& stream, PathCounters& counters, PathSample* out) {
   DiffuseSceneView view = scene.diffuse_scene()->view();

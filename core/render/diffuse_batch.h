@@ -11,6 +11,8 @@
 // (docs/foundation.md, sixteenth round).
 #pragma once
 
+#include <string>
+
 #include "core/render/path_stages.h"
 
 namespace gdvr {
@@ -18,6 +20,11 @@ namespace gdvr {
 // Whether trace_diffuse_batch can run: `scene` has diffuse records and this
 // CPU has AVX2.
 bool diffuse_batch_available(const FrameScene& scene);
+
+// Why trace_tile_samples will not use the diffuse batch for `scene` with
+// these settings and `paths_in_flight` (empty: it will), for the frame
+// statistics' list of what the pipeline left out.
+std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, int paths_in_flight);
 
 // trace_path_batch's work for paths[0..n) (n <= kPathBatch, all at depth 0):
 // out[i] is path i's sample, as the scalar batch gives it.

@@ -99,6 +99,14 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   EXPECT_EQ(matpreview->scene->diffuse_scene(), nullptr);
   EXPECT_NE(matpreview->scene->why_not_diffuse().find("not an area emitter"), std::string::npos)
       << matpreview->scene->why_not_diffuse();
+
+  // What the frame statistics say was left out.
+  PathTracerSettings settings;
+  EXPECT_EQ(why_no_diffuse_batch(*matpreview->scene, settings, kPathBatch), matpreview->scene->why_not_diffuse());
+  EXPECT_NE(why_no_diffuse_batch(*cbox->scene, settings, 1).find("1 at a time"), std::string::npos);
+  EXPECT_EQ(why_no_diffuse_batch(*cbox->scene, settings, kPathBatch).empty(), diffuse_batch_available(*cbox->scene));
+  settings.vector_kernels = false;
+  EXPECT_NE(why_no_diffuse_batch(*cbox->scene, settings, kPathBatch).find("switched off"), std::string::npos);
 }
 
 struct Variant {
