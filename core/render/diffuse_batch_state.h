@@ -18,8 +18,8 @@ class Distribution1D;
 // Paths in a diffuse batch (== kPathBatch: path_batch.cpp hands its batches over).
 constexpr int kDiffuseBatch = 64;
 
-// A triangle of a static mesh with a constant diffuse BSDF: what a vertex on
-// it reads, in one cache line (with gathers of indices, corners, normal,
+// A triangle of a mesh with a constant diffuse BSDF, in world space at this
+// frame: what a vertex on it reads, in one cache line (with gathers of indices, corners, normal,
 // offset floor and reflectance field by field, AVX2 gained a fifth less:
 // docs/experiments/README.md).
 struct alignas(64) DiffuseTriangleRecord {
@@ -55,7 +55,8 @@ static_assert(sizeof(EmitterTriangleRecord) == 64);
 struct DiffuseSceneView {
   const DiffuseTriangleRecord* triangles = nullptr;
   const SmoothNormalsRecord* smooth_normals = nullptr;  // null when every triangle is flat
-  const uint32_t* shape_first = nullptr;  // shape id -> its first record
+  const uint32_t* shape_first = nullptr;      // shape id -> its first record
+  const int32_t* shape_two_sided = nullptr;   // shape id -> -1 where its BSDF is two-sided, else 0
   const EmitterTriangleRecord* emitter_triangles = nullptr;
   const uint32_t* emitter_first = nullptr;  // emitter -> its first emitter record
   // emitter -> its triangles' area distribution (FrameScene's, so the same

@@ -36,71 +36,86 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
   for (size_t e = 0; e < scene.emitters.size(); ++e)
     if (scene.emitters[e].type != EmitterType::kArea)
       return fail("emitter " + std::to_string(e) + " is not an area emitter");
-  for (size_t e = 0; e < scene.emitters.size(); ++e)
-    for (const FrameScene::ShapeState::EmitterTriangle& tri : fs.shapes_[size_t(scene.emitters[e].shape)].emitter_triangles)
-      if (!tri.face_normal) return fail("emitter " + std::to_string(e) + "'s shape interpolates vertex normals");
   size_t triangle_count = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
     const Shape& shape = scene.shapes[i];
-    const FrameScene::ShapeState& s = fs.shapes_[i];
     if (shape.type != ShapeType::kMesh) return fail(shape_name(scene, i) + " is not a triangle mesh");
-    if (s.instanced) return fail(shape_name(scene, i) + " is animated");
     const Bsdf& bsdf = scene.bsdfs[size_t(shape.bsdf)];
-    if (bsdf.type != BsdfType::kDiffuse || bsdf.two_sided || !bsdf.reflectance.is_constant() ||
-        !is_finite(bsdf.reflectance.value))
-      return fail(shape_name(scene, i) + "'s BSDF is not a one-sided diffuse one of constant reflectance");
-    triangle_count += s.mesh->triangle_count();
+    if (bsdf.type != BsdfType::kDiffuse || !bsdf.reflectance.is_constant() || !is_finite(bsdf.reflectance.value))
+      return fail(shape_name(scene, i) + "'s BSDF is not a diffuse one of constant reflectance");
+    triangle_count += fs.shapes_[i].mesh->triangle_count();
   }
   if (triangle_count > kMaxTriangles)
     return fail("the scene has " + std::to_string(triangle_count) + " triangles (records are built for at most " +
                 std::to_string(kMaxTriangles) + ")");
 
   std::unique_ptr<DiffuseScene> ds(new DiffuseScene());
-  ds->triangles_.reserve(triangle_count);
+  ds->triangles_.resize(triangle_count);
   ds->shape_first_.resize(scene.shapes.size());
-  bool any_smooth = false;
+  ds->shape_two_sided_.resize(scene.shapes.size());
+  uint32_t first = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
-    const Shape& shape = scene.shapes[i];
-    const FrameScene::ShapeState& s = fs.shapes_[i];
-    const TriangleMesh& m = *s.mesh;  // world space: the shape is static
-    const Rgb albedo = scene.bsdfs[size_t(shape.bsdf)].reflectance.value;
-    ds->shape_first_[i] = uint32_t(ds->triangles_.size());
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-      DiffuseTriangleRecord r;
-      put3(r.p0, m.positions[m.indices[3 * t]]);
-      put3(r.p1, m.positions[m.indices[3 * t + 1]]);
-      put3(r.p2, m.positions[m.indices[3 * t + 2]]);
-      const Vec3f n = FrameScene::world_face_normal(s, t);  // what interaction() reads
-      put3(r.n, shape.flip_normals ? -n : n);
-      put3(r.albedo, albedo);
-      const bool smooth = !FrameScene::shades_with_face_normal(s, t);
-      r.offset_floor = smooth ? -s.offset_floors[t] : s.offset_floors[t];
-      any_smooth |= smooth;
-      ds->triangles_.push_back(r);
-    }
+    ds->shape_first_[i] = first;
+    first += uint32_t(fs.shapes_[i].mesh->triangle_count());
+    ds->shape_two_sided_[i] = scene.bsdfs[size_t(scene.shapes[i].bsdf)].two_sided ? -1 : 0;
+    if (fs.shapes_[i].instanced) ds->animated_shapes_.push_back(i);
+    if (!ds->bake_shape(fs, i, why_not)) return nullptr;
   }
-  if (any_smooth) {
-    // OBJ meshes without normals get smooth vertex normals, as in Mitsuba, so
-    // a non-planar quad (cbox's red wall) shades with them.
-    ds->smooth_normals_.resize(triangle_count);
-    for (size_t i = 0; i < scene.shapes.size(); ++i) {
-      const FrameScene::ShapeState& s = fs.shapes_[i];
-      const TriangleMesh& m = *s.mesh;
-      for (size_t t = 0; t < m.triangle_count(); ++t) {
-        if (FrameScene::shades_with_face_normal(s, t)) continue;
-        SmoothNormalsRecord& r = ds->smooth_normals_[ds->shape_first_[i] + t];
-        put3(r.n0, m.normals[m.indices[3 * t]]);
-        put3(r.n1, m.normals[m.indices[3 * t + 1]]);
-        put3(r.n2, m.normals[m.indices[3 * t + 2]]);
-        r.flip = scene.shapes[i].flip_normals ? -1.0f : 1.0f;
-      }
-    }
-  }
-  ds->refresh_emitters(fs);
+  if (!ds->bake_emitters(fs, why_not)) return nullptr;
+  ds->update_view();
   return ds;
 }
 
-void DiffuseScene::refresh_emitters(const FrameScene& fs) {
+bool DiffuseScene::refresh(const FrameScene& fs, std::string* why_not) {
+  for (size_t i : animated_shapes_)
+    if (!bake_shape(fs, i, why_not)) return false;
+  if (!bake_emitters(fs, why_not)) return false;
+  update_view();
+  return true;
+}
+
+bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_not) {
+  const Scene& scene = fs.scene_;
+  const Shape& shape = scene.shapes[i];
+  const FrameScene::ShapeState& s = fs.shapes_[i];
+  // World space for a static shape; object space (placed by to_world) for an animated one.
+  const TriangleMesh& m = *s.mesh;
+  const Rgb albedo = scene.bsdfs[size_t(shape.bsdf)].reflectance.value;
+  for (size_t t = 0; t < m.triangle_count(); ++t) {
+    Vec3f p0 = m.positions[m.indices[3 * t]], p1 = m.positions[m.indices[3 * t + 1]],
+          p2 = m.positions[m.indices[3 * t + 2]];
+    if (s.instanced) p0 = s.to_world.point(p0), p1 = s.to_world.point(p1), p2 = s.to_world.point(p2);
+    // What interaction() computes at a hit on the triangle.
+    const Vec3f n = FrameScene::world_face_normal(s, t);
+    const float offset_floor = s.instanced ? triangle_offset_floor(p0, p1, p2) : s.offset_floors[t];
+    const bool smooth = !FrameScene::shades_with_face_normal(s, t);
+    if (smooth && s.instanced) {
+      // interaction() transforms the interpolated normal of an animated
+      // shape; the kernel interpolates world-space normals only.
+      *why_not = "animated " + shape_name(scene, i) + " interpolates vertex normals";
+      return false;
+    }
+    DiffuseTriangleRecord& r = triangles_[shape_first_[i] + t];
+    put3(r.p0, p0);
+    put3(r.p1, p1);
+    put3(r.p2, p2);
+    put3(r.n, shape.flip_normals ? -n : n);
+    put3(r.albedo, albedo);
+    r.offset_floor = smooth ? -offset_floor : offset_floor;
+    if (!smooth) continue;
+    // OBJ meshes without normals get smooth vertex normals, as in Mitsuba, so
+    // a non-planar quad (cbox's red wall) shades with them.
+    if (smooth_normals_.empty()) smooth_normals_.resize(triangles_.size());
+    SmoothNormalsRecord& sn = smooth_normals_[shape_first_[i] + t];
+    put3(sn.n0, m.normals[m.indices[3 * t]]);
+    put3(sn.n1, m.normals[m.indices[3 * t + 1]]);
+    put3(sn.n2, m.normals[m.indices[3 * t + 2]]);
+    sn.flip = shape.flip_normals ? -1.0f : 1.0f;
+  }
+  return true;
+}
+
+bool DiffuseScene::bake_emitters(const FrameScene& fs, std::string* why_not) {
   const Scene& scene = fs.scene_;
   emitter_triangles_.clear();
   emitter_first_.assign(scene.emitters.size(), 0);
@@ -111,23 +126,28 @@ void DiffuseScene::refresh_emitters(const FrameScene& fs) {
     emitter_first_[e] = uint32_t(emitter_triangles_.size());
     emitter_choice_[e] = &s.triangle_areas;
     for (const FrameScene::ShapeState::EmitterTriangle& tri : s.emitter_triangles) {
+      if (!tri.face_normal) {
+        *why_not = "emitter " + std::to_string(e) + "'s shape interpolates vertex normals";
+        return false;
+      }
       EmitterTriangleRecord r;
       put3(r.p0, tri.p0);
       put3(r.p1, tri.p1);
       put3(r.p2, tri.p2);
-      put3(r.n, tri.n);  // flip_normals applied; flat (build() checked every triangle)
+      put3(r.n, tri.n);  // flip_normals applied
       put3(r.radiance, em.radiance);
       r.area = s.area;
       emitter_triangles_.push_back(r);
     }
   }
-  update_view();
+  return true;
 }
 
 void DiffuseScene::update_view() {
   view_.triangles = triangles_.data();
   view_.smooth_normals = smooth_normals_.empty() ? nullptr : smooth_normals_.data();
   view_.shape_first = shape_first_.data();
+  view_.shape_two_sided = shape_two_sided_.data();
   view_.emitter_triangles = emitter_triangles_.data();
   view_.emitter_first = emitter_first_.data();
   view_.emitter_choice = emitter_choice_.data();
@@ -139,7 +159,7 @@ void DiffuseScene::update_view() {
 size_t DiffuseScene::memory_bytes() const {
   return triangles_.size() * sizeof(DiffuseTriangleRecord) + smooth_normals_.size() * sizeof(SmoothNormalsRecord) +
          emitter_triangles_.size() * sizeof(EmitterTriangleRecord) +
-         (shape_first_.size() + emitter_first_.size()) * sizeof(uint32_t) +
+         (shape_first_.size() + shape_two_sided_.size() + emitter_first_.size()) * sizeof(uint32_t) +
          emitter_choice_.size() * sizeof(const Distribution1D*);
 }
 

@@ -1,9 +1,9 @@
-// A scene whose every surface is a static triangle mesh with a one-sided
-// diffuse BSDF of constant reflectance, lit only by area emitters on
-// such meshes (Cornell boxes, architectural interiors), laid out for the
-// diffuse path batch's vector kernel (diffuse_batch.h): one 64-byte record
-// per triangle instead of the index buffer, three corners and four
-// per-triangle tables that a vertex otherwise reads.
+// A scene whose every surface is a triangle mesh with a diffuse BSDF of
+// constant reflectance (one- or two-sided), lit only by area emitters on such
+// meshes (Cornell boxes, architectural interiors), laid out for the diffuse
+// path batch's vector kernel (diffuse_batch.h): one 64-byte record per
+// triangle instead of the index buffer, three corners and four per-triangle
+// tables that a vertex otherwise reads.
 //
 // FrameScene builds it where the scene allows and says why not elsewhere;
 // everything else keeps the general path tracer.
@@ -24,8 +24,11 @@ class DiffuseScene {
   // The records of `scene`, or null with `why_not` naming the first thing
   // the scene has that they cannot hold.
   static std::unique_ptr<DiffuseScene> build(const FrameScene& scene, std::string* why_not);
-  // Re-reads the emitters' placement and radiance after FrameScene::update.
-  void refresh_emitters(const FrameScene& scene);
+  // After FrameScene::update: re-bakes the animated shapes' records at their
+  // new place and re-reads the emitters. False (and `why_not`) where the
+  // scene no longer fits (an animated shape's mirroring transform made it
+  // interpolate vertex normals); the records must then be dropped.
+  bool refresh(const FrameScene& scene, std::string* why_not);
 
   const DiffuseSceneView& view() const { return view_; }
   size_t memory_bytes() const;
@@ -35,11 +38,16 @@ class DiffuseScene {
 
  private:
   DiffuseScene() = default;
+  // Shape i's triangle records as interaction() would shade its hits now.
+  bool bake_shape(const FrameScene& scene, size_t i, std::string* why_not);
+  bool bake_emitters(const FrameScene& scene, std::string* why_not);
   void update_view();
 
   std::vector<DiffuseTriangleRecord> triangles_;
   std::vector<SmoothNormalsRecord> smooth_normals_;  // parallel to triangles_, or empty if all are flat
   std::vector<uint32_t> shape_first_;
+  std::vector<int32_t> shape_two_sided_;
+  std::vector<size_t> animated_shapes_;
   std::vector<EmitterTriangleRecord> emitter_triangles_;
   std::vector<uint32_t> emitter_first_;
   std::vector<const Distribution1D*> emitter_choice_;

@@ -169,8 +169,12 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
 
   // ---- The hit (FrameScene::interaction) ----
   uint32_t tri[kLanes];
-  for (int i = 0; i < kLanes; ++i)
-    tri[i] = shade[i] ? scene.shape_first[st->hit_shape[k + i]] + uint32_t(st->hit_prim[k + i]) : 0u;
+  alignas(32) int32_t two_sided_lanes[kLanes];
+  for (int i = 0; i < kLanes; ++i) {
+    const int32_t shape = shade[i] ? st->hit_shape[k + i] : 0;
+    tri[i] = shade[i] ? scene.shape_first[shape] + uint32_t(st->hit_prim[k + i]) : 0u;
+    two_sided_lanes[i] = shade[i] ? scene.shape_two_sided[shape] : 0;
+  }
   const RecordLanes h = load_records(scene.triangles, tri);
   const V3 c0{h.f[0], h.f[1], h.f[2]}, c1{h.f[3], h.f[4], h.f[5]}, c2{h.f[6], h.f[7], h.f[8]};
   const V3 n{h.f[9], h.f[10], h.f[11]}, albedo{h.f[12], h.f[13], h.f[14]};
@@ -199,6 +203,10 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   const V3 ft{b, sign + ns.y * ns.y * a, -ns.y};
   const V3 wo_world = -load3(st->d, k);
   const vf wo_z = vdot(wo_world, ns);
+  // Mitsuba's twosided (bsdf.cpp, mirror_to_front): a query from the back
+  // mirrors both directions to the front, and a sample back again.
+  const vi mirrored = load<vi>(two_sided_lanes) & ~(wo_z >= 0.0f);
+  const vf wo_front_z = vsel(mirrored, -wo_z, wo_z);
 
   // ---- sample_emitter: a uniform emitter, an area-weighted triangle, a point ----
   const vf u_select = rng.next_float(shade);
@@ -235,9 +243,9 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   const V3 weight = vsel3(vdot(ln, es_d) < 0.0f, radiance * (1.0f / es_pdf), V3{splat(0.0f), splat(0.0f), splat(0.0f)});
 
   // ---- connect_emitter: the diffuse BSDF towards it, MIS, the shadow ray ----
-  const vf wl_z = vdot(es_d, ns);
+  const vf wl_z = vsel(mirrored, -vdot(es_d, ns), vdot(es_d, ns));
   // diffuse_eval_pdf's test is `wo.z <= 0 || wi.z <= 0`, kept as written for NaN.
-  const vi lit = shade & sampled & ~is_black(weight) & ~(wo_z <= 0.0f) & ~(wl_z <= 0.0f);
+  const vi lit = shade & sampled & ~is_black(weight) & ~(wo_front_z <= 0.0f) & ~(wl_z <= 0.0f);
   const vf bsdf_pdf = kInvPi * wl_z;
   const V3 f = albedo * bsdf_pdf;
   const vi connect = lit & ~is_black(f);
@@ -253,9 +261,9 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   const vf vx = rng.next_float(shade), vy = rng.next_float(shade);
   const V3 wi = cosine_hemisphere(vx, vy);
   const vf pdf = kInvPi * wi.z;
-  vi alive = shade & ~(wo_z <= 0.0f) & (pdf > 0.0f) & ~is_black(albedo);
+  vi alive = shade & ~(wo_front_z <= 0.0f) & (pdf > 0.0f) & ~is_black(albedo);
   throughput = vsel3(alive, throughput * albedo, throughput);
-  const V3 next_d = fs * wi.x + ft * wi.y + ns * wi.z;  // Frame::to_world
+  const V3 next_d = fs * wi.x + ft * wi.y + ns * vsel(mirrored, -wi.z, wi.z);  // Frame::to_world
   store3(st->o, k, offset_p(p, offset_floor, n, next_d), alive);
   store3(st->d, k, next_d, alive);
   store1(st->tmin, k, splat(0.0f), alive);

@@ -62,10 +62,6 @@ float triangle_area(Vec3f a, Vec3f b, Vec3f c) { return 0.5f * length(cross(b - 
 
 // The scale of the coordinates a hit on this triangle is interpolated from
 // (SurfaceInteraction::offset_floor), in world space.
-float triangle_offset_floor(Vec3f p0, Vec3f p1, Vec3f p2) {
-  return std::min(1.0f, std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)}));
-}
-
 // The distance along `ray` to the sphere's root nearest Embree's `embree_t`,
 // solved in double. Embree's single-ray and packet kernels round a sphere's
 // t differently (by an ulp or two), so the hit point is computed here, from
@@ -254,7 +250,7 @@ Status FrameScene::update(const Scene& scene) {
   scene_.emitters = scene.emitters;
   scene_.camera = scene.camera;
   GDVR_RETURN_IF_ERROR(prepare_emitters());
-  if (diffuse_) diffuse_->refresh_emitters(*this);
+  if (diffuse_ && !diffuse_->refresh(*this, &why_not_diffuse_)) diffuse_.reset();
   return Status::Ok();
 }
 

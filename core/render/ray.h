@@ -1,6 +1,7 @@
 // Rays and surface interactions shared by the integrators.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 
@@ -17,6 +18,11 @@ constexpr float kInfinity = std::numeric_limits<float>::infinity();
 // and at 1e5 scale both work and unit-scale scenes offset exactly as Mitsuba.
 constexpr float kRayEpsilon = 8.940697e-05f;   // 1500 float ulps at 1
 constexpr float kShadowEpsilon = kRayEpsilon * 10.0f;
+
+// SurfaceInteraction::offset_floor of a hit on the triangle (p0, p1, p2).
+inline float triangle_offset_floor(Vec3f p0, Vec3f p1, Vec3f p2) {
+  return std::min(1.0f, std::max({max_abs_component(p0), max_abs_component(p1), max_abs_component(p2)}));
+}
 
 struct Ray {
   Vec3f o, d;

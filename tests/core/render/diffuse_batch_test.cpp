@@ -33,8 +33,10 @@ bool same_ray(const RecordedRay& a, const RecordedRay& b) {
 
 // A room (an inward-facing cube) lit by two area emitters: a fan of triangles
 // of unequal areas (so that picking a triangle searches the distribution)
-// and a flipped rectangle; a black panel and a red one stand in it.
-std::unique_ptr<FrameScene> load_room(Scene* desc) {
+// and a flipped rectangle; a black panel and a two-sided red one stand in it.
+// With `animated`, the fan and the red panel are animated (instanced) shapes.
+constexpr size_t kFan = 1, kRedPanel = 4;
+std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "gdvr_diffuse_batch_test";
   std::filesystem::create_directories(dir);
   {
@@ -68,14 +70,16 @@ std::unique_ptr<FrameScene> load_room(Scene* desc) {
   </shape>
   <shape type="rectangle">
     <transform name="to_world"><scale value="0.25"/><rotate x="1" angle="70"/><translate x="0.3" y="-0.6" z="0.2"/></transform>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.9, 0, 0"/></bsdf>
+    <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.9, 0, 0"/></bsdf></bsdf>
   </shape>
 </scene>)";
   auto loaded = load_mitsuba_scene_from_string(xml, dir.string(), LoadOptions{});
   EXPECT_TRUE(loaded.ok()) << loaded.status().to_string();
   if (!loaded.ok()) return nullptr;
   *desc = std::move(loaded.value());
-  auto fs = FrameScene::create(*desc, {});
+  std::vector<bool> animate(desc->shapes.size(), false);
+  animate[kFan] = animate[kRedPanel] = animated;
+  auto fs = FrameScene::create(*desc, animate);
   EXPECT_TRUE(fs.ok()) << fs.status().to_string();
   return fs.ok() ? std::move(fs.value()) : nullptr;
 }
@@ -191,6 +195,34 @@ TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
   ASSERT_TRUE(room);
   if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
+}
+
+// Animated shapes are baked into the records at each frame's place: before
+// and after FrameScene::update moves them, the kernel's paths are the scalar
+// batch's.
+TEST(DiffuseBatchTest, AnimatedShapesMatchTheScalarBatchAfterUpdates) {
+  Scene desc;
+  auto room = load_room(&desc, /*animated=*/true);
+  ASSERT_TRUE(room);
+  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  expect_same_as_scalar_batch(*room, kVariants[1], kW, kH);
+  Scene moved = desc;
+  moved.shapes[kRedPanel].to_world =
+      Transform::translate({-0.2f, 0.3f, 0.1f}) * Transform::rotate({0, 1, 0}, 40.0f) * desc.shapes[kRedPanel].to_world;
+  moved.shapes[kFan].to_world = Transform::translate({0.1f, -0.05f, 0.2f}) * desc.shapes[kFan].to_world;
+  ASSERT_TRUE(room->update(moved).ok());
+  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  expect_same_as_scalar_batch(*room, kVariants[1], kW, kH);
+  expect_same_as_scalar_batch(*room, kVariants[2], kW, kH);
+  // A mirroring transform: interaction() now interpolates the panel's vertex
+  // normals (FrameScene::shades_with_face_normal), which the kernel does not
+  // do for animated shapes, so the records go and the scalar batch renders.
+  moved.shapes[kRedPanel].to_world = Transform::scale({-1.0f, 1.0f, 1.0f}) * moved.shapes[kRedPanel].to_world;
+  ASSERT_TRUE(room->update(moved).ok());
+  EXPECT_EQ(room->diffuse_scene(), nullptr);
+  EXPECT_NE(room->why_not_diffuse().find("animated shape 4"), std::string::npos) << room->why_not_diffuse();
+  EXPECT_FALSE(diffuse_batch_available(*room));
 }
 
 // The whole renderer: an image with the vector kernel is the scalar one's.
