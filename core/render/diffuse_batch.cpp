@@ -88,26 +88,35 @@ void add_emission_on_lane(const FrameScene& scene, const PathTracerSettings& set
 
 }  // namespace
 
-bool diffuse_batch_available(const FrameScene& scene) {
+const std::vector<DiffuseKernel>& diffuse_kernels() {
+  static const std::vector<DiffuseKernel> kernels = [] {
+    std::vector<DiffuseKernel> k;
 #if defined(GDVR_AVX2_KERNELS)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  return avx2 && scene.diffuse_scene() != nullptr;
-#else
-  (void)scene;
-  return false;
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+        __builtin_cpu_supports("avx512dq"))
+      k.push_back({"avx512", shade_diffuse_vertices_avx512});
+    if (__builtin_cpu_supports("avx2")) k.push_back({"avx2", shade_diffuse_vertices_avx2});
 #endif
+    return k;
+  }();
+  return kernels;
+}
+
+bool diffuse_batch_available(const FrameScene& scene) {
+  return !diffuse_kernels().empty() && scene.diffuse_scene() != nullptr;
 }
 
 std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, int paths_in_flight) {
   if (!settings.vector_kernels) return "vector kernels are switched off";
   if (paths_in_flight < kPathBatch) return "paths are traced " + std::to_string(paths_in_flight) + " at a time";
   if (!scene.diffuse_scene()) return scene.why_not_diffuse();
-  if (!diffuse_batch_available(scene)) return "this CPU has no AVX2";
+  if (diffuse_kernels().empty()) return "this CPU has no AVX2";
   return "";
 }
 
 void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
-                         RayStream& stream, PathCounters& counters, PathSample* out) {
+                         RayStream& stream, PathCounters& counters, PathSample* out, const DiffuseKernel* kernel) {
+  if (!kernel) kernel = &diffuse_kernels().front();
   DiffuseSceneView view = scene.diffuse_scene()->view();
   view.rr_depth = settings.rr_depth;
   DiffuseBatchState s;
@@ -143,9 +152,7 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
     }
 
     // ---- Eight paths' vertices at a time ----
-#if defined(GDVR_AVX2_KERNELS)
-    shade_diffuse_vertices_avx2(view, &s);
-#endif
+    kernel->shade(view, &s);
 
     // ---- Shadow rays as one stream, then the paths that go on (in order) ----
     // Without branches: which paths connect and go on is random, and

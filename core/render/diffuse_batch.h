@@ -1,7 +1,7 @@
 // The path batch (path_batch.h) for a scene that FrameScene laid out as
 // diffuse records (diffuse_scene.h): the paths' state as struct of arrays,
-// each vertex shaded eight paths at a time by an AVX2 kernel
-// (diffuse_vertex_avx2.cpp), the rays cast as the scalar batch casts them.
+// each vertex shaded eight paths at a time by an AVX2 or AVX-512 kernel
+// (diffuse_vertex_kernel.inl), the rays cast as the scalar batch casts them.
 // Every path's radiance is the scalar batch's bit for bit, so an image does
 // not depend on which CPU rendered it. Paths hand over to the scalar stages
 // for what the kernel leaves out: emission seen along a ray (a few per cent
@@ -12,13 +12,23 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/render/path_stages.h"
 
 namespace gdvr {
 
+// A vertex kernel (diffuse_batch_state.h) and the instruction set it needs.
+struct DiffuseKernel {
+  const char* isa;  // "avx512", "avx2"
+  void (*shade)(const DiffuseSceneView& scene, DiffuseBatchState* state);
+};
+// The kernels this CPU can run, fastest first; empty where it has no AVX2
+// (or the build is not for x86-64).
+const std::vector<DiffuseKernel>& diffuse_kernels();
+
 // Whether trace_diffuse_batch can run: `scene` has diffuse records and this
-// CPU has AVX2.
+// CPU has a kernel.
 bool diffuse_batch_available(const FrameScene& scene);
 
 // Why trace_tile_samples will not use the diffuse batch for `scene` with
@@ -27,8 +37,10 @@ bool diffuse_batch_available(const FrameScene& scene);
 std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, int paths_in_flight);
 
 // trace_path_batch's work for paths[0..n) (n <= kPathBatch, all at depth 0):
-// out[i] is path i's sample, as the scalar batch gives it.
+// out[i] is path i's sample, as the scalar batch gives it. `kernel`: one of
+// diffuse_kernels() (tests run each); null, the fastest.
 void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
-                         RayStream& stream, PathCounters& counters, PathSample* out);
+                         RayStream& stream, PathCounters& counters, PathSample* out,
+                         const DiffuseKernel* kernel = nullptr);
 
 }  // namespace gdvr

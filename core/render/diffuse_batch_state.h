@@ -92,7 +92,10 @@ struct alignas(64) DiffuseBatchState {
 // shading, next-event estimation towards the area emitters, the cosine-
 // weighted bounce and Russian roulette, with path_stages.h's arithmetic in
 // its order, so every lane comes out bit for bit as sample_emitter,
-// connect_emitter and sample_bsdf leave a PathState. AVX2 only.
+// connect_emitter and sample_bsdf leave a PathState. One entry point per
+// instruction set (diffuse_vertex_kernel.inl), each callable only where the
+// CPU has it.
 void shade_diffuse_vertices_avx2(const DiffuseSceneView& scene, DiffuseBatchState* state);
+void shade_diffuse_vertices_avx512(const DiffuseSceneView& scene, DiffuseBatchState* state);
 
 }  // namespace gdvr

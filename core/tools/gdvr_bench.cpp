@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "core/render/diffuse_batch.h"
 #include "core/render/frame_scene.h"
 #include "core/render/path_batch.h"
 #include "core/render/perspective_camera.h"
@@ -251,8 +252,12 @@ int main(int argc, char** argv) {
   std::printf("scene            %s\n", path.c_str());
   std::printf("resolution       %dx%d, %d spp, %d threads, %d runs (medians)\n", s.width, s.height, spp, thread_count, runs);
   std::printf("rays per render  %llu (recorded %zu)\n", (unsigned long long)pt_rays, cast_order.size());
-  std::printf("path tracer      %.2f Mrays/s, %d paths in flight per thread\n", median(pt_rate) * 1e-6,
-              s.paths_in_flight);
+  const std::string scalar_why = why_no_diffuse_batch(frame_scene, s.path, s.paths_in_flight);
+  const std::string kernel = scalar_why.empty() ? std::string("diffuse batch, ") + diffuse_kernels().front().isa +
+                                                      " kernel"
+                                                : "scalar batch: the diffuse batch's kernel is left out, " + scalar_why;
+  std::printf("path tracer      %.2f Mrays/s, %d paths in flight per thread (%s)\n", median(pt_rate) * 1e-6,
+              s.paths_in_flight, kernel.c_str());
   std::printf("  one at a time  %.2f Mrays/s (batched / one at a time: %.3f, median of per-run ratios)\n",
               median(single_rate) * 1e-6, median(gains));
   std::printf("bare Embree      %.2f Mrays/s as the tracer's streams (%zu); single rays: %.2f in cast order, %.2f in path order\n",

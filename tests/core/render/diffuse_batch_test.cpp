@@ -113,6 +113,25 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   EXPECT_NE(why_no_diffuse_batch(*cbox->scene, settings, kPathBatch).find("switched off"), std::string::npos);
 }
 
+// The kernels offered are those the CPU can run, fastest first.
+TEST(DiffuseBatchTest, KernelsAreThoseThisCpuRuns) {
+  const std::vector<DiffuseKernel>& kernels = diffuse_kernels();
+#if defined(__x86_64__)
+  const bool avx2 = __builtin_cpu_supports("avx2");
+  const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                      __builtin_cpu_supports("avx512dq");
+  ASSERT_EQ(kernels.size(), size_t(avx2) + size_t(avx512));
+  if (avx512) {
+    EXPECT_STREQ(kernels.front().isa, "avx512");
+  }
+  if (avx2) {
+    EXPECT_STREQ(kernels.back().isa, "avx2");
+  }
+#else
+  EXPECT_TRUE(kernels.empty());
+#endif
+}
+
 struct Variant {
   int max_depth, rr_depth;
   bool hide_emitters;
@@ -135,13 +154,20 @@ void start_paths(const FrameScene& scene, int w, int h, int n, std::vector<PathS
   }
 }
 
-// Batches of 64 paths and a partial one, vector against scalar.
+// Batches of 64 paths and a partial one, vector (every kernel this CPU
+// runs) against scalar.
+void expect_kernel_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h,
+                                        const DiffuseKernel& kernel);
 void expect_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h) {
+  for (const DiffuseKernel& kernel : diffuse_kernels()) expect_kernel_same_as_scalar_batch(scene, v, w, h, kernel);
+}
+void expect_kernel_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h,
+                                        const DiffuseKernel& kernel) {
   PathTracerSettings settings;
   settings.max_depth = v.max_depth;
   settings.rr_depth = v.rr_depth;
   settings.hide_emitters = v.hide_emitters;
-  const std::string what = "max_depth " + std::to_string(v.max_depth) + ", rr_depth " + std::to_string(v.rr_depth) +
+  const std::string what = std::string(kernel.isa) + ", max_depth " + std::to_string(v.max_depth) + ", rr_depth " + std::to_string(v.rr_depth) +
                            (v.hide_emitters ? ", emitters hidden" : "");
   constexpr int kPaths = 3 * kPathBatch + 23;
   std::vector<PathState> scalar_paths, vector_paths;
@@ -156,7 +182,7 @@ void expect_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int 
   RayStream stream;
   for (int base = 0; base < kPaths; base += kPathBatch)
     trace_diffuse_batch(scene, settings, vector_paths.data() + base, std::min(kPathBatch, kPaths - base), stream,
-                        vector_counters, vector.data() + base);
+                        vector_counters, vector.data() + base, &kernel);
   int nonzero = 0, differ = 0;
   for (int i = 0; i < kPaths; ++i) {
     const bool same = same_bits(scalar[size_t(i)].radiance, vector[size_t(i)].radiance) &&
