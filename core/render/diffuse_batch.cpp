@@ -116,6 +116,11 @@ std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettin
 
 void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                          RayStream& stream, PathCounters& counters, PathSample* out, const DiffuseKernel* kernel) {
+  if (!scene.diffuse_scene() || (!kernel && diffuse_kernels().empty())) {
+    // Callers check diffuse_batch_available(); this keeps a careless one correct.
+    trace_path_batch(scene, settings, paths, n, counters, out);
+    return;
+  }
   if (!kernel) kernel = &diffuse_kernels().front();
   DiffuseSceneView view = scene.diffuse_scene()->view();
   view.rr_depth = settings.rr_depth;

@@ -38,7 +38,8 @@ std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettin
 
 // trace_path_batch's work for paths[0..n) (n <= kPathBatch, all at depth 0):
 // out[i] is path i's sample, as the scalar batch gives it. `kernel`: one of
-// diffuse_kernels() (tests run each); null, the fastest.
+// diffuse_kernels() (tests run each); null, the fastest. Where the batch is
+// not available (diffuse_batch_available), the scalar batch runs instead.
 void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                          RayStream& stream, PathCounters& counters, PathSample* out,
                          const DiffuseKernel* kernel = nullptr);

@@ -224,6 +224,30 @@ TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
+// A caller that skips diffuse_batch_available() still gets the scalar
+// batch's paths, not a crash, on a scene without records.
+TEST(DiffuseBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
+  auto ts = load_test_scene("veach-mis", kW, kH);
+  ASSERT_TRUE(ts);
+  ASSERT_EQ(ts->scene->diffuse_scene(), nullptr);
+  std::vector<PathState> scalar_paths, vector_paths;
+  start_paths(*ts->scene, kW, kH, kPathBatch, &scalar_paths);
+  start_paths(*ts->scene, kW, kH, kPathBatch, &vector_paths);
+  std::vector<PathSample> scalar(kPathBatch), vector(kPathBatch);
+  PathCounters scalar_counters, vector_counters;
+  trace_path_batch(*ts->scene, ts->render.path, scalar_paths.data(), kPathBatch, scalar_counters, scalar.data());
+  RayStream stream;
+  trace_diffuse_batch(*ts->scene, ts->render.path, vector_paths.data(), kPathBatch, stream, vector_counters,
+                      vector.data());
+  int lit = 0;
+  for (int i = 0; i < kPathBatch; ++i) {
+    EXPECT_TRUE(same_bits(scalar[size_t(i)].radiance, vector[size_t(i)].radiance)) << "path " << i;
+    lit += !scalar[size_t(i)].radiance.is_black();
+  }
+  EXPECT_GT(lit, 0);
+  EXPECT_EQ(scalar_counters.rays, vector_counters.rays);
+}
+
 // Animated shapes are baked into the records at each frame's place: before
 // and after FrameScene::update moves them, the kernel's paths are the scalar
 // batch's.
