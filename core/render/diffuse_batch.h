@@ -7,8 +7,8 @@
 // for what the kernel leaves out: emission seen along a ray (a few per cent
 // of hits, scalar either way) and the last ray under max_depth.
 //
-// On cbox this made the path tracer's own code per ray about 2x faster
-// (docs/foundation.md, sixteenth round).
+// On cbox this made the path tracer's own code per ray about 1.9x faster
+// (docs/foundation.md, fifteenth round).
 #pragma once
 
 #include <string>

@@ -3,10 +3,11 @@
 // paths as struct of arrays (one array per field, a lane per path), so that
 // eight paths' fields load as one AVX2 vector.
 //
-// Plain data only. The kernel (diffuse_vertex_avx2.cpp) is compiled for AVX2
-// and runs only where the CPU has it; an inline function it shared with the
-// rest of gdvr could be emitted in its AVX2 form and picked by the linker for
-// callers on any CPU. So nothing here has code, and the kernel keeps its own.
+// Plain data only. The kernel (diffuse_vertex_kernel.inl) is compiled for
+// AVX2 and for AVX-512 and runs only where the CPU has them; an inline
+// function it shared with the rest of gdvr could be emitted in such a form
+// and picked by the linker for callers on any CPU. So nothing here has code,
+// and the kernel keeps its own.
 #pragma once
 
 #include <cstdint>
