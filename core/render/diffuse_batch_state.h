@@ -15,6 +15,7 @@
 namespace gdvr {
 
 class Distribution1D;
+struct Texture;
 
 // Paths in a diffuse batch (== kPathBatch: path_batch.cpp hands its batches over).
 constexpr int kDiffuseBatch = 64;
@@ -26,22 +27,23 @@ constexpr int kDiffuseBatch = 64;
 struct alignas(64) DiffuseTriangleRecord {
   float p0[3], p1[3], p2[3];  // world-space corners
   float n[3];                 // unit face normal, flip_normals applied
-  float albedo[3];            // the diffuse reflectance
+  float albedo[3];            // the diffuse reflectance where it is constant
   // SurfaceInteraction::offset_floor (never negative), its sign bit set where
-  // the triangle shades with interpolated vertex normals (SmoothNormalsRecord)
+  // the triangle shades with interpolated vertex normals (ShadingRecord)
   // rather than with its face normal.
   float offset_floor;
 };
 static_assert(sizeof(DiffuseTriangleRecord) == 64);
 
-// The vertex normals of a triangle that interpolates them (world space,
-// before flip_normals), at the same index as its DiffuseTriangleRecord.
-struct alignas(64) SmoothNormalsRecord {
+// What a triangle needs beyond its DiffuseTriangleRecord where it shades
+// with interpolated vertex normals or a textured reflectance, at the same
+// index: the vertex normals (world space, before flip_normals) and uvs.
+struct alignas(64) ShadingRecord {
   float n0[3], n1[3], n2[3];
   float flip;  // -1 with flip_normals, else 1
-  float unused[6];
+  float uv0[2], uv1[2], uv2[2];
 };
-static_assert(sizeof(SmoothNormalsRecord) == 64);
+static_assert(sizeof(ShadingRecord) == 64);
 
 // A triangle of an area emitter, with its emitter's radiance and total area.
 struct alignas(64) EmitterTriangleRecord {
@@ -52,12 +54,21 @@ struct alignas(64) EmitterTriangleRecord {
 };
 static_assert(sizeof(EmitterTriangleRecord) == 64);
 
+// DiffuseSceneView::shape_flags: what a shape's hits need beyond its records.
+constexpr uint32_t kShapeTwoSided = 1;  // its BSDF is two-sided
+constexpr uint32_t kShapeTextured = 2;  // its reflectance is a texture (ShadingRecord has the uvs)
+constexpr uint32_t kShapeHasUvs = 4;    // its mesh has uvs (else the barycentrics are the uv, as in interaction())
+
 // The scene as the kernel sees it (pointers into DiffuseScene's arrays).
 struct DiffuseSceneView {
   const DiffuseTriangleRecord* triangles = nullptr;
-  const SmoothNormalsRecord* smooth_normals = nullptr;  // null when every triangle is flat
+  // Null when every triangle is flat and untextured.
+  const ShadingRecord* shading = nullptr;
   const uint32_t* shape_first = nullptr;      // shape id -> its first record
-  const int32_t* shape_two_sided = nullptr;   // shape id -> -1 where its BSDF is two-sided, else 0
+  const uint32_t* shape_flags = nullptr;      // shape id -> kShape* bits below
+  // shape id -> its reflectance where that is a texture (else null; the
+  // record holds the constant).
+  const Texture* const* shape_texture = nullptr;
   const EmitterTriangleRecord* emitter_triangles = nullptr;
   const uint32_t* emitter_first = nullptr;  // emitter -> its first emitter record
   // emitter -> its triangles' area distribution (FrameScene's, so the same

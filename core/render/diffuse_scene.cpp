@@ -41,8 +41,10 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
     const Shape& shape = scene.shapes[i];
     if (shape.type != ShapeType::kMesh) return fail(shape_name(scene, i) + " is not a triangle mesh");
     const Bsdf& bsdf = scene.bsdfs[size_t(shape.bsdf)];
-    if (bsdf.type != BsdfType::kDiffuse || !bsdf.reflectance.is_constant() || !is_finite(bsdf.reflectance.value))
-      return fail(shape_name(scene, i) + "'s BSDF is not a diffuse one of constant reflectance");
+    if (bsdf.type != BsdfType::kDiffuse)
+      return fail(shape_name(scene, i) + "'s BSDF is not a diffuse one");
+    if (bsdf.reflectance.is_constant() && !is_finite(bsdf.reflectance.value))
+      return fail(shape_name(scene, i) + "'s reflectance is not finite");
     triangle_count += fs.shapes_[i].mesh->triangle_count();
   }
   if (triangle_count > kMaxTriangles)
@@ -52,12 +54,17 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
   std::unique_ptr<DiffuseScene> ds(new DiffuseScene());
   ds->triangles_.resize(triangle_count);
   ds->shape_first_.resize(scene.shapes.size());
-  ds->shape_two_sided_.resize(scene.shapes.size());
+  ds->shape_flags_.resize(scene.shapes.size());
+  ds->shape_texture_.resize(scene.shapes.size());
   uint32_t first = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
     ds->shape_first_[i] = first;
     first += uint32_t(fs.shapes_[i].mesh->triangle_count());
-    ds->shape_two_sided_[i] = scene.bsdfs[size_t(scene.shapes[i].bsdf)].two_sided ? -1 : 0;
+    const Bsdf& bsdf = scene.bsdfs[size_t(scene.shapes[i].bsdf)];
+    const bool textured = !bsdf.reflectance.is_constant();
+    ds->shape_flags_[i] = (bsdf.two_sided ? kShapeTwoSided : 0u) | (textured ? kShapeTextured : 0u) |
+                          (fs.shapes_[i].mesh->uvs.empty() ? 0u : kShapeHasUvs);
+    ds->shape_texture_[i] = textured ? &bsdf.reflectance : nullptr;
     if (fs.shapes_[i].instanced) ds->animated_shapes_.push_back(i);
     if (!ds->bake_shape(fs, i, why_not)) return nullptr;
   }
@@ -80,7 +87,9 @@ bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_n
   const FrameScene::ShapeState& s = fs.shapes_[i];
   // World space for a static shape; object space (placed by to_world) for an animated one.
   const TriangleMesh& m = *s.mesh;
-  const Rgb albedo = scene.bsdfs[size_t(shape.bsdf)].reflectance.value;
+  const Texture& reflectance = scene.bsdfs[size_t(shape.bsdf)].reflectance;
+  const bool textured = !reflectance.is_constant();
+  const Rgb albedo = textured ? Rgb(0.0f) : reflectance.value;
   for (size_t t = 0; t < m.triangle_count(); ++t) {
     Vec3f p0 = m.positions[m.indices[3 * t]], p1 = m.positions[m.indices[3 * t + 1]],
           p2 = m.positions[m.indices[3 * t + 2]];
@@ -102,15 +111,23 @@ bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_n
     put3(r.n, shape.flip_normals ? -n : n);
     put3(r.albedo, albedo);
     r.offset_floor = smooth ? -offset_floor : offset_floor;
-    if (!smooth) continue;
+    if (!smooth && !textured) continue;
     // OBJ meshes without normals get smooth vertex normals, as in Mitsuba, so
     // a non-planar quad (cbox's red wall) shades with them.
-    if (smooth_normals_.empty()) smooth_normals_.resize(triangles_.size());
-    SmoothNormalsRecord& sn = smooth_normals_[shape_first_[i] + t];
-    put3(sn.n0, m.normals[m.indices[3 * t]]);
-    put3(sn.n1, m.normals[m.indices[3 * t + 1]]);
-    put3(sn.n2, m.normals[m.indices[3 * t + 2]]);
-    sn.flip = shape.flip_normals ? -1.0f : 1.0f;
+    if (shading_.empty()) shading_.resize(triangles_.size());
+    ShadingRecord& sr = shading_[shape_first_[i] + t];
+    if (smooth) {
+      put3(sr.n0, m.normals[m.indices[3 * t]]);
+      put3(sr.n1, m.normals[m.indices[3 * t + 1]]);
+      put3(sr.n2, m.normals[m.indices[3 * t + 2]]);
+      sr.flip = shape.flip_normals ? -1.0f : 1.0f;
+    }
+    if (textured && !m.uvs.empty()) {
+      const Vec2f uv0 = m.uvs[m.indices[3 * t]], uv1 = m.uvs[m.indices[3 * t + 1]], uv2 = m.uvs[m.indices[3 * t + 2]];
+      sr.uv0[0] = uv0.x, sr.uv0[1] = uv0.y;
+      sr.uv1[0] = uv1.x, sr.uv1[1] = uv1.y;
+      sr.uv2[0] = uv2.x, sr.uv2[1] = uv2.y;
+    }
   }
   return true;
 }
@@ -145,9 +162,10 @@ bool DiffuseScene::bake_emitters(const FrameScene& fs, std::string* why_not) {
 
 void DiffuseScene::update_view() {
   view_.triangles = triangles_.data();
-  view_.smooth_normals = smooth_normals_.empty() ? nullptr : smooth_normals_.data();
+  view_.shading = shading_.empty() ? nullptr : shading_.data();
   view_.shape_first = shape_first_.data();
-  view_.shape_two_sided = shape_two_sided_.data();
+  view_.shape_flags = shape_flags_.data();
+  view_.shape_texture = shape_texture_.data();
   view_.emitter_triangles = emitter_triangles_.data();
   view_.emitter_first = emitter_first_.data();
   view_.emitter_choice = emitter_choice_.data();
@@ -157,9 +175,10 @@ void DiffuseScene::update_view() {
 }
 
 size_t DiffuseScene::memory_bytes() const {
-  return triangles_.size() * sizeof(DiffuseTriangleRecord) + smooth_normals_.size() * sizeof(SmoothNormalsRecord) +
+  return triangles_.size() * sizeof(DiffuseTriangleRecord) + shading_.size() * sizeof(ShadingRecord) +
          emitter_triangles_.size() * sizeof(EmitterTriangleRecord) +
-         (shape_first_.size() + shape_two_sided_.size() + emitter_first_.size()) * sizeof(uint32_t) +
+         (shape_first_.size() + shape_flags_.size() + emitter_first_.size()) * sizeof(uint32_t) +
+         shape_texture_.size() * sizeof(const Texture*) +
          emitter_choice_.size() * sizeof(const Distribution1D*);
 }
 

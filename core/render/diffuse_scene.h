@@ -1,5 +1,5 @@
-// A scene whose every surface is a triangle mesh with a diffuse BSDF of
-// constant reflectance (one- or two-sided), lit only by area emitters on such
+// A scene whose every surface is a triangle mesh with a diffuse BSDF (one-
+// or two-sided, constant or textured reflectance), lit only by area emitters on such
 // meshes (Cornell boxes, architectural interiors), laid out for the diffuse
 // path batch's vector kernel (diffuse_batch.h): one 64-byte record per
 // triangle instead of the index buffer, three corners and four per-triangle
@@ -44,9 +44,10 @@ class DiffuseScene {
   void update_view();
 
   std::vector<DiffuseTriangleRecord> triangles_;
-  std::vector<SmoothNormalsRecord> smooth_normals_;  // parallel to triangles_, or empty if all are flat
+  std::vector<ShadingRecord> shading_;  // parallel to triangles_, or empty if all are flat and untextured
   std::vector<uint32_t> shape_first_;
-  std::vector<int32_t> shape_two_sided_;
+  std::vector<uint32_t> shape_flags_;
+  std::vector<const Texture*> shape_texture_;
   std::vector<size_t> animated_shapes_;
   std::vector<EmitterTriangleRecord> emitter_triangles_;
   std::vector<uint32_t> emitter_first_;

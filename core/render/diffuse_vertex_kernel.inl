@@ -34,6 +34,7 @@
 #include "core/math/vec.h"
 #include "core/render/diffuse_batch_state.h"
 #include "core/render/ray.h"
+#include "core/texture/texture.h"
 
 namespace gdvr {
 namespace {
@@ -177,31 +178,57 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
 
   // ---- The hit (FrameScene::interaction) ----
   uint32_t tri[kLanes];
-  alignas(32) int32_t two_sided_lanes[kLanes];
+  alignas(32) uint32_t flag_lanes[kLanes];
   for (int i = 0; i < kLanes; ++i) {
     const int32_t shape = shade[i] ? st->hit_shape[k + i] : 0;
     tri[i] = shade[i] ? scene.shape_first[shape] + uint32_t(st->hit_prim[k + i]) : 0u;
-    two_sided_lanes[i] = shade[i] ? scene.shape_two_sided[shape] : 0;
+    flag_lanes[i] = shade[i] ? scene.shape_flags[shape] : 0u;
   }
+  const vu flags = load<vu>(flag_lanes);
   const RecordLanes h = load_records(scene.triangles, tri);
   const V3 c0{h.f[0], h.f[1], h.f[2]}, c1{h.f[3], h.f[4], h.f[5]}, c2{h.f[6], h.f[7], h.f[8]};
-  const V3 n{h.f[9], h.f[10], h.f[11]}, albedo{h.f[12], h.f[13], h.f[14]};
+  const V3 n{h.f[9], h.f[10], h.f[11]};
+  V3 albedo{h.f[12], h.f[13], h.f[14]};
   const vf offset_floor = vabs(h.f[15]);
   const vi smooth = shade & ((vi)h.f[15] < 0);  // the sign bit
+  const vi textured = (flags & kShapeTextured) != 0u;
   const vf b1 = load<vf>(&st->hit_u[k]), b2 = load<vf>(&st->hit_v[k]);
-  const V3 p = c0 * (1.0f - b1 - b2) + c1 * b1 + c2 * b2;
-  // The shading normal: the face normal, or (FrameScene::interpolated_normal)
-  // the vertex normals interpolated and normalised, the face normal where
-  // that fails, then flip_normals.
+  const vf b0 = 1.0f - b1 - b2;
+  const V3 p = c0 * b0 + c1 * b1 + c2 * b2;
   V3 ns = n;
-  if (!_mm256_testz_si256((__m256i)smooth, (__m256i)smooth)) {
-    const RecordLanes sn = load_records(scene.smooth_normals, tri);
-    const V3 n0{sn.f[0], sn.f[1], sn.f[2]}, n1{sn.f[3], sn.f[4], sn.f[5]}, n2{sn.f[6], sn.f[7], sn.f[8]};
-    V3 interp = n0 * (1.0f - b1 - b2) + n1 * b1 + n2 * b2;
-    const vf l2 = vdot(interp, interp);
-    interp = vsel3(l2 > 0.0f, interp * (1.0f / vsqrt(l2)), interp);
-    const vi ok = finite(interp.x) & finite(interp.y) & finite(interp.z) & (vdot(interp, interp) > 0.5f);
-    ns = vsel3(smooth & ok, interp * sn.f[9], n);
+  const vi needs_shading_record = smooth | textured;
+  if (!_mm256_testz_si256((__m256i)needs_shading_record, (__m256i)needs_shading_record)) {
+    const RecordLanes sr = load_records(scene.shading, tri);
+    // The shading normal: the face normal, or (FrameScene::interpolated_normal)
+    // the vertex normals interpolated and normalised, the face normal where
+    // that fails, then flip_normals.
+    if (!_mm256_testz_si256((__m256i)smooth, (__m256i)smooth)) {
+      const V3 n0{sr.f[0], sr.f[1], sr.f[2]}, n1{sr.f[3], sr.f[4], sr.f[5]}, n2{sr.f[6], sr.f[7], sr.f[8]};
+      V3 interp = n0 * b0 + n1 * b1 + n2 * b2;
+      const vf l2 = vdot(interp, interp);
+      interp = vsel3(l2 > 0.0f, interp * (1.0f / vsqrt(l2)), interp);
+      const vi ok = finite(interp.x) & finite(interp.y) & finite(interp.z) & (vdot(interp, interp) > 0.5f);
+      ns = vsel3(smooth & ok, interp * sr.f[9], n);
+    }
+    // A textured reflectance at the hit's uv (the mesh's, interpolated, or
+    // the barycentrics), evaluated lane by lane.
+    if (!_mm256_testz_si256((__m256i)textured, (__m256i)textured)) {
+      const vi has_uvs = (flags & kShapeHasUvs) != 0u;
+      const vf u = vsel(has_uvs, sr.f[10] * b0 + sr.f[12] * b1 + sr.f[14] * b2, b1);
+      const vf v = vsel(has_uvs, sr.f[11] * b0 + sr.f[13] * b1 + sr.f[15] * b2, b2);
+      alignas(32) float r[kLanes], g[kLanes], bl[kLanes];
+      for (int i = 0; i < kLanes; ++i) {
+        r[i] = g[i] = bl[i] = 0.0f;
+        if (!textured[i]) continue;
+        const Texture* texture = scene.shape_texture[st->hit_shape[k + i]];
+        Vec2f uv;  // field by field: Vec2f's constructor is gdvr inline code
+        uv.x = u[i];
+        uv.y = v[i];
+        const Rgb c = texture->eval_varying(uv);
+        r[i] = c.r, g[i] = c.g, bl[i] = c.b;
+      }
+      albedo = vsel3(textured, V3{load<vf>(r), load<vf>(g), load<vf>(bl)}, albedo);
+    }
   }
   // Frame(ns) (Duff et al.).
   const vf sign = (vf)(((vu)ns.z & 0x80000000u) | 0x3f800000u);  // copysign(1, ns.z)
@@ -213,7 +240,7 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   const vf wo_z = vdot(wo_world, ns);
   // Mitsuba's twosided (bsdf.cpp, mirror_to_front): a query from the back
   // mirrors both directions to the front, and a sample back again.
-  const vi mirrored = load<vi>(two_sided_lanes) & ~(wo_z >= 0.0f);
+  const vi mirrored = ((flags & kShapeTwoSided) != 0u) & ~(wo_z >= 0.0f);
   const vf wo_front_z = vsel(mirrored, -wo_z, wo_z);
 
   // ---- sample_emitter: a uniform emitter, an area-weighted triangle, a point ----

@@ -37,9 +37,9 @@ struct Texture {
   Rgb eval(Vec2f uv) const { return type == TextureType::kConstant ? value : eval_varying(uv); }
   // Mean over the texture's domain (for albedo estimates and lobe selection).
   Rgb mean() const;
-
- private:
-  Rgb eval_varying(Vec2f uv) const;  // bitmap, checkerboard
+  // eval() of a bitmap or checkerboard, out of line: what the vector kernels
+  // call per lane (they call no inline code of the rest of gdvr).
+  Rgb eval_varying(Vec2f uv) const;
 };
 
 }  // namespace gdvr

@@ -32,9 +32,11 @@ bool same_ray(const RecordedRay& a, const RecordedRay& b) {
          a.coherent == b.coherent && a.stream == b.stream;
 }
 
-// A room (an inward-facing cube) lit by two area emitters: a fan of triangles
-// of unequal areas (so that picking a triangle searches the distribution)
-// and a flipped rectangle; a black panel and a two-sided red one stand in it.
+// A room (an inward-facing cube, checkered through its uvs) lit by two area
+// emitters: a fan of triangles of unequal areas (so that picking a triangle
+// searches the distribution; checkered through its barycentrics, as it has
+// no uvs) and a flipped rectangle; a black panel and a two-sided red one
+// stand in it.
 // With `animated`, the fan and the red panel are animated (instanced) shapes.
 constexpr size_t kFan = 1, kRedPanel = 4;
 std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
@@ -52,11 +54,15 @@ std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
     <transform name="to_world"><lookat origin="0, 0, -0.9" target="0, 0, 1" up="0, 1, 0"/></transform>
     <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
   </sensor>
-  <bsdf type="diffuse" id="wall"><rgb name="reflectance" value="0.8, 0.7, 0.6"/></bsdf>
+  <texture type="checkerboard" id="checks">
+    <rgb name="color0" value="0.8, 0.7, 0.6"/><rgb name="color1" value="0.3, 0.5, 0.2"/>
+    <transform name="to_uv"><scale x="5" y="3"/></transform>
+  </texture>
+  <bsdf type="diffuse" id="wall"><ref name="reflectance" id="checks"/></bsdf>
   <shape type="cube"><boolean name="flip_normals" value="true"/><ref id="wall"/></shape>
   <shape type="obj">
     <string name="filename" value="fan.obj"/>
-    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf>
+    <bsdf type="diffuse"><ref name="reflectance" id="checks"/></bsdf>
     <emitter type="area"><rgb name="radiance" value="6, 5, 4"/></emitter>
   </shape>
   <shape type="rectangle">
