@@ -150,7 +150,6 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
       s.hit_prim[i] = int32_t(hit.prim);
       s.hit_u[i] = hit.u;
       s.hit_v[i] = hit.v;
-      s.hit_t[i] = hit.t;
       s.shade[i] = -1;
       if (scene.emitter_of_shape(hit.id) >= 0 && !(depth == 0 && settings.hide_emitters))
         add_emission_on_lane(scene, settings, &s, i, hit, &scratch);

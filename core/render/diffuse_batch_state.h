@@ -20,10 +20,10 @@ struct Texture;
 // Paths in a diffuse batch (== kPathBatch: path_batch.cpp hands its batches over).
 constexpr int kDiffuseBatch = 64;
 
-// A triangle of a mesh with a constant diffuse BSDF, in world space at this
-// frame: what a vertex on it reads, in one cache line (with gathers of indices, corners, normal,
-// offset floor and reflectance field by field, AVX2 gained a fifth less:
-// docs/experiments/README.md).
+// A triangle of a mesh with a diffuse BSDF, in world space at this frame:
+// what a vertex on it reads, in one cache line (with gathers of indices,
+// corners, normal, offset floor and reflectance field by field, AVX2 gained
+// a fifth less: docs/experiments/README.md).
 struct alignas(64) DiffuseTriangleRecord {
   float p0[3], p1[3], p2[3];  // world-space corners
   float n[3];                 // unit face normal, flip_normals applied
@@ -65,7 +65,7 @@ struct DiffuseSceneView {
   // Null when every triangle is flat and untextured.
   const ShadingRecord* shading = nullptr;
   const uint32_t* shape_first = nullptr;      // shape id -> its first record
-  const uint32_t* shape_flags = nullptr;      // shape id -> kShape* bits below
+  const uint32_t* shape_flags = nullptr;      // shape id -> the kShape* bits above
   // shape id -> its reflectance where that is a texture (else null; the
   // record holds the constant).
   const Texture* const* shape_texture = nullptr;
@@ -89,9 +89,9 @@ struct alignas(64) DiffuseBatchState {
   alignas(64) float throughput[3][kDiffuseBatch], result[3][kDiffuseBatch], direct[3][kDiffuseBatch];
   alignas(64) float prev_p[3][kDiffuseBatch], prev_pdf[kDiffuseBatch];
   alignas(64) int32_t prev_delta[kDiffuseBatch], depth[kDiffuseBatch];
-  // The closest hit of the ray (shape id, triangle, barycentrics, distance).
+  // The closest hit of the ray (shape id, triangle, barycentrics).
   alignas(64) int32_t hit_shape[kDiffuseBatch], hit_prim[kDiffuseBatch];
-  alignas(64) float hit_u[kDiffuseBatch], hit_v[kDiffuseBatch], hit_t[kDiffuseBatch];
+  alignas(64) float hit_u[kDiffuseBatch], hit_v[kDiffuseBatch];
   alignas(64) int32_t shade[kDiffuseBatch];      // in: -1 shades this lane's vertex, 0 leaves it
   alignas(64) int32_t continues[kDiffuseBatch];  // out: -1 where the path has a next ray
   // Out: next-event estimation waiting for its shadow ray.
