@@ -5,6 +5,7 @@
 
 #include "core/bsdf/beckmann_slope.h"
 #include "core/bsdf/fresnel.h"
+#include "core/math/elementary.h"
 
 namespace gdvr {
 namespace {
@@ -53,7 +54,7 @@ void gauss_legendre(int n, std::vector<double>* nodes, std::vector<double>* weig
 
 float erfinv(float x) {
   // Giles, "Approximating the erfinv function", GPU Computing Gems Jade, 2011.
-  float w = -std::log((1.0f - x) * (1.0f + x)), p;
+  float w = -log_f((1.0f - x) * (1.0f + x)), p;
   if (w < 5.0f) {
     w -= 2.5f;
     p = 2.81022636e-08f;
@@ -88,7 +89,7 @@ float MicrofacetDistribution::eval(Vec3f m) const {
   if (cos_theta_2 <= 0.0f) return 0.0f;
   float result;
   if (type == MicrofacetType::kBeckmann) {
-    result = exp_or_zero(-(sqr(m.x / alpha_u) + sqr(m.y / alpha_v)) / cos_theta_2) /
+    result = exp_f(-(sqr(m.x / alpha_u) + sqr(m.y / alpha_v)) / cos_theta_2) /
              (kPi * alpha_uv * sqr(cos_theta_2));
   } else {
     result = 1.0f / (kPi * alpha_uv * sqr(sqr(m.x / alpha_u) + sqr(m.y / alpha_v) + sqr(m.z)));
@@ -129,7 +130,7 @@ float MicrofacetDistribution::smith_g1(Vec3f v, Vec3f m) const {
     // erfc were 2 % of PT on veach-mis; the test sweeps against long double).
     const float a = std::abs(v.z) / std::sqrt(xy_alpha_2);
     if (a >= 9.0f) return 1.0f;  // Lambda < 1e-37
-    const float lambda = 0.5f * (std::exp(-a * a) * kInvSqrtPi / a - std::erfc(a));
+    const float lambda = 0.5f * (exp_f(-a * a) * kInvSqrtPi / a - erfc_f(a));
     return 1.0f / (1.0f + lambda);
   }
   float tan_theta_alpha_2 = xy_alpha_2 / sqr(v.z);
@@ -165,7 +166,7 @@ std::pair<Vec3f, float> MicrofacetDistribution::sample(Vec3f wi, Vec2f u) const 
     }
     float cos_theta, pdf;
     if (type == MicrofacetType::kBeckmann) {
-      cos_theta = 1.0f / std::sqrt(1.0f - alpha_2 * std::log(1.0f - u.x));
+      cos_theta = 1.0f / std::sqrt(1.0f - alpha_2 * log_f(1.0f - u.x));
       float cos_theta_3 = std::max(cos_theta * cos_theta * cos_theta, 1e-20f);
       pdf = (1.0f - u.x) / (kPi * alpha_u * alpha_v * cos_theta_3);
     } else {

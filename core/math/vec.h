@@ -18,12 +18,6 @@ constexpr float kInvFourPi = 0.07957747154594766788f;
 inline float radians(float deg) { return deg * (kPi / 180.0f); }
 inline float safe_sqrt(float x) { return std::sqrt(std::max(0.0f, x)); }
 inline float sqr(float x) { return x * x; }
-// std::exp(x), answered without the call where expf's result is 0 anyway
-// (x < -104 < ln 2^-150): there glibc takes a slow path that sets errno and
-// raises the underflow flag, which cost 1-1.5 % of veach-mis's time (the
-// Beckmann D of light samples far outside a sharp lobe). Same bits as
-// std::exp everywhere.
-inline float exp_or_zero(float x) { return x < -104.0f ? 0.0f : std::exp(x); }
 
 struct Vec2f {
   float x = 0, y = 0;

@@ -86,6 +86,48 @@ void add_emission_on_lane(const FrameScene& scene, const PathTracerSettings& set
   set_lane(s->direct, i, scratch->direct);
 }
 
+// The whole vertex of lane i, whose hit the kernel does not shade (a sphere,
+// a BSDF it lacks: kShapeScalar), by the scalar stages through a PathState,
+// in path_batch.cpp's order: emission, the emitter sample and its BSDF
+// value, the BSDF sample and Russian roulette.
+void shade_vertex_on_lane(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* s, int i,
+                          const RayHit& hit, PathState* st) {
+  store_path(*s, i, st);
+  st->hit = true;
+  st->blocked = false;
+  scene.interaction(st->ray, hit, &st->si);
+  add_emission(scene, settings, st);
+  s->shadow_pending[i] = 0;
+  s->continues[i] = 0;
+  if (st->continues) {
+    sample_emitter(scene, st);
+    connect_emitter(st);
+    sample_bsdf(settings, st);
+  }
+  s->rng_state[i] = st->sampler.generator().state();
+  set_lane(s->result, i, st->result);
+  set_lane(s->direct, i, st->direct);
+  if (st->shadow_pending) {
+    s->shadow_pending[i] = -1;
+    set_lane(s->shadow_o, i, st->shadow.o);
+    set_lane(s->shadow_d, i, st->shadow.d);
+    s->shadow_tmax[i] = st->shadow.tmax;
+    set_lane(s->shadow_contribution, i, st->shadow_contribution);
+  }
+  if (st->continues) {
+    s->continues[i] = -1;
+    set_lane(s->o, i, st->ray.o);
+    set_lane(s->d, i, st->ray.d);
+    s->tmin[i] = st->ray.tmin;
+    s->tmax[i] = st->ray.tmax;
+    set_lane(s->throughput, i, st->throughput);
+    set_lane(s->prev_p, i, st->prev_p);
+    s->prev_pdf[i] = st->prev_bsdf_pdf;
+    s->prev_delta[i] = st->prev_bsdf_delta ? -1 : 0;
+    s->depth[i] = st->depth;
+  }
+}
+
 }  // namespace
 
 const std::vector<DiffuseKernel>& diffuse_kernels() {
@@ -127,6 +169,7 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
   DiffuseBatchState s;
   load_paths(paths, n, &s);
   int live[kPathBatch], shadowed[kPathBatch];
+  int32_t scalar_shaded[kPathBatch] = {};  // -1 where shade_vertex_on_lane shaded the vertex
   int count = n;
   for (int i = 0; i < n; ++i) live[i] = i;
   PathState scratch;
@@ -146,6 +189,11 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
       const int i = live[k];
       if (!stream.found(k)) continue;  // no environment: nothing is seen, the path ends
       const RayHit hit = stream.hit(k);
+      if (view.shape_flags[hit.id] & kShapeScalar) {
+        shade_vertex_on_lane(scene, settings, &s, i, hit, &scratch);
+        scalar_shaded[i] = -1;
+        continue;
+      }
       s.hit_shape[i] = hit.id;
       s.hit_prim[i] = int32_t(hit.prim);
       s.hit_u[i] = hit.u;
@@ -164,8 +212,9 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
     int pending = 0, next = 0;
     for (int k = 0; k < count; ++k) {
       const int i = live[k];
-      const int32_t shaded = s.shade[i];
+      const int32_t shaded = s.shade[i] | scalar_shaded[i];
       s.shade[i] = 0;
+      scalar_shaded[i] = 0;
       shadowed[pending] = i;
       pending += (shaded & s.shadow_pending[i]) != 0;
       live[next] = i;

@@ -58,6 +58,45 @@ static_assert(sizeof(EmitterTriangleRecord) == 64);
 constexpr uint32_t kShapeTwoSided = 1;  // its BSDF is two-sided
 constexpr uint32_t kShapeTextured = 2;  // its reflectance is a texture (ShadingRecord has the uvs)
 constexpr uint32_t kShapeHasUvs = 4;    // its mesh has uvs (else the barycentrics are the uv, as in interaction())
+// Its BSDF is a rough conductor with Beckmann visible-normal sampling
+// (ConductorRecord), not a diffuse one.
+constexpr uint32_t kShapeConductor = 8;
+// The kernel does not shade its hits (a sphere, another BSDF): the driver
+// runs the scalar stages for them (diffuse_batch.cpp), and it has no records.
+constexpr uint32_t kShapeScalar = 16;
+
+// A rough conductor's parameters (Mitsuba's roughconductor, Beckmann,
+// visible normals), by shape id.
+struct alignas(64) ConductorRecord {
+  float alpha_u, alpha_v;  // as MicrofacetDistribution keeps them (at least 1e-4)
+  float eta[3], k[3];      // the complex index of refraction per channel
+  float specular[3];       // specular_reflectance (a constant)
+  float unused[5];
+};
+static_assert(sizeof(ConductorRecord) == 64);
+
+// A sphere area emitter, by emitter index (radius 0 for other emitters).
+struct alignas(64) SphereEmitterRecord {
+  float center[3];
+  float radius;
+  float radiance[3];
+  float flip;  // -1 with flip_normals, else 1
+  float unused[8];
+};
+static_assert(sizeof(SphereEmitterRecord) == 64);
+
+// FrameScene::sample_emitter_direction's answer, as plain data.
+struct EmitterSampleLane {
+  float d[3];
+  float dist;  // infinity for an emitter at infinity
+  float pdf;
+  float weight[3];
+  int32_t delta;  // -1 for a Dirac emitter (point, spot, directional), else 0
+};
+// Calls FrameScene::sample_emitter_direction on `scene` (a FrameScene) at
+// the point p, with the three numbers sample_emitter draws.
+using SampleEmitterFn = void (*)(const void* scene, const float p[3], float u_select, float ux, float uy,
+                                 EmitterSampleLane* out);
 
 // The scene as the kernel sees it (pointers into DiffuseScene's arrays).
 struct DiffuseSceneView {
@@ -66,10 +105,19 @@ struct DiffuseSceneView {
   const ShadingRecord* shading = nullptr;
   const uint32_t* shape_first = nullptr;      // shape id -> its first record
   const uint32_t* shape_flags = nullptr;      // shape id -> the kShape* bits above
+  // shape id -> its conductor's parameters where kShapeConductor is set.
+  const ConductorRecord* shape_conductor = nullptr;
   // shape id -> its reflectance where that is a texture (else null; the
   // record holds the constant).
   const Texture* const* shape_texture = nullptr;
+  // Null unless every emitter is an area emitter on a flat-shaded mesh;
+  // next-event estimation then calls sample_emitter lane by lane.
   const EmitterTriangleRecord* emitter_triangles = nullptr;
+  SampleEmitterFn sample_emitter = nullptr;
+  // emitter -> its sphere, where the scene has sphere emitters (else null):
+  // the kernel samples those from outside the sphere itself.
+  const SphereEmitterRecord* emitter_spheres = nullptr;
+  const void* frame_scene = nullptr;  // sample_emitter's first argument
   const uint32_t* emitter_first = nullptr;  // emitter -> its first emitter record
   // emitter -> its triangles' area distribution (FrameScene's, so the same
   // index and remapped number for the same u).

@@ -1,5 +1,6 @@
 #include "core/render/diffuse_scene.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/render/frame_scene.h"
@@ -24,6 +25,37 @@ std::string shape_name(const Scene& scene, size_t i) {
   return "shape " + std::to_string(i) + (id.empty() ? "" : " ('" + id + "')");
 }
 
+// What the kernel can do with hits on shape i: kShapeConductor for a rough
+// Beckmann conductor sampled by visible normals, 0 for a diffuse BSDF (both
+// on triangle meshes), kShapeScalar for anything else.
+uint32_t shading_kind(const FrameScene& fs, const Scene& scene, size_t i) {
+  const Shape& shape = scene.shapes[i];
+  if (shape.type != ShapeType::kMesh) return kShapeScalar;
+  const Bsdf& bsdf = scene.bsdfs[size_t(shape.bsdf)];
+  if (bsdf.type == BsdfType::kDiffuse)
+    return bsdf.reflectance.is_constant() && !is_finite(bsdf.reflectance.value) ? kShapeScalar : 0u;
+  if (bsdf.type == BsdfType::kRoughConductor && bsdf.distribution == MicrofacetType::kBeckmann &&
+      bsdf.sample_visible && bsdf.specular_reflectance.is_constant() && is_finite(bsdf.specular_reflectance.value) &&
+      is_finite(bsdf.eta) && is_finite(bsdf.k))
+    return kShapeConductor;
+  (void)fs;
+  return kShapeScalar;
+}
+
+// FrameScene::sample_emitter_direction for the kernel (SampleEmitterFn). Only
+// the reference point of the interaction is read.
+void sample_emitter_lane(const void* scene, const float p[3], float u_select, float ux, float uy,
+                         EmitterSampleLane* out) {
+  SurfaceInteraction ref;
+  ref.p = Vec3f(p[0], p[1], p[2]);
+  const EmitterSample es = static_cast<const FrameScene*>(scene)->sample_emitter_direction(ref, u_select, {ux, uy});
+  put3(out->d, es.d);
+  out->dist = es.dist;
+  out->pdf = es.pdf;
+  put3(out->weight, es.weight);
+  out->delta = es.delta ? -1 : 0;
+}
+
 }  // namespace
 
 std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::string* why_not) {
@@ -33,42 +65,56 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
     return std::unique_ptr<DiffuseScene>();
   };
   if (scene.emitters.empty()) return fail("the scene has no emitter");
+  // Rays that leave the scene would need the environment's radiance.
   for (size_t e = 0; e < scene.emitters.size(); ++e)
-    if (scene.emitters[e].type != EmitterType::kArea)
-      return fail("emitter " + std::to_string(e) + " is not an area emitter");
-  size_t triangle_count = 0;
+    if (scene.emitters[e].type == EmitterType::kConstant || scene.emitters[e].type == EmitterType::kEnvmap)
+      return fail("emitter " + std::to_string(e) + " is an environment");
+  size_t triangle_count = 0, vector_shapes = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
-    const Shape& shape = scene.shapes[i];
-    if (shape.type != ShapeType::kMesh) return fail(shape_name(scene, i) + " is not a triangle mesh");
-    const Bsdf& bsdf = scene.bsdfs[size_t(shape.bsdf)];
-    if (bsdf.type != BsdfType::kDiffuse)
-      return fail(shape_name(scene, i) + "'s BSDF is not a diffuse one");
-    if (bsdf.reflectance.is_constant() && !is_finite(bsdf.reflectance.value))
-      return fail(shape_name(scene, i) + "'s reflectance is not finite");
+    if (shading_kind(fs, scene, i) == kShapeScalar) continue;
+    ++vector_shapes;
     triangle_count += fs.shapes_[i].mesh->triangle_count();
   }
+  if (vector_shapes == 0)
+    return fail("no shape is a triangle mesh with a diffuse or a rough Beckmann conductor BSDF");
   if (triangle_count > kMaxTriangles)
     return fail("the scene has " + std::to_string(triangle_count) + " triangles (records are built for at most " +
                 std::to_string(kMaxTriangles) + ")");
 
   std::unique_ptr<DiffuseScene> ds(new DiffuseScene());
   ds->triangles_.resize(triangle_count);
-  ds->shape_first_.resize(scene.shapes.size());
-  ds->shape_flags_.resize(scene.shapes.size());
-  ds->shape_texture_.resize(scene.shapes.size());
+  ds->shape_first_.assign(scene.shapes.size(), 0);
+  ds->shape_flags_.assign(scene.shapes.size(), 0);
+  ds->shape_texture_.assign(scene.shapes.size(), nullptr);
+  ds->shape_conductor_.assign(scene.shapes.size(), ConductorRecord{});
   uint32_t first = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
+    const uint32_t kind = shading_kind(fs, scene, i);
+    if (kind == kShapeScalar) {
+      ds->shape_flags_[i] = kShapeScalar;
+      continue;
+    }
     ds->shape_first_[i] = first;
     first += uint32_t(fs.shapes_[i].mesh->triangle_count());
     const Bsdf& bsdf = scene.bsdfs[size_t(scene.shapes[i].bsdf)];
-    const bool textured = !bsdf.reflectance.is_constant();
-    ds->shape_flags_[i] = (bsdf.two_sided ? kShapeTwoSided : 0u) | (textured ? kShapeTextured : 0u) |
+    const bool textured = kind == 0 && !bsdf.reflectance.is_constant();
+    ds->shape_flags_[i] = kind | (bsdf.two_sided ? kShapeTwoSided : 0u) | (textured ? kShapeTextured : 0u) |
                           (fs.shapes_[i].mesh->uvs.empty() ? 0u : kShapeHasUvs);
     ds->shape_texture_[i] = textured ? &bsdf.reflectance : nullptr;
+    if (kind == kShapeConductor) {
+      // As MicrofacetDistribution's constructor clamps them.
+      ConductorRecord& c = ds->shape_conductor_[i];
+      c.alpha_u = std::max(bsdf.alpha_u, 1e-4f);
+      c.alpha_v = std::max(bsdf.alpha_v, 1e-4f);
+      put3(c.eta, bsdf.eta);
+      put3(c.k, bsdf.k);
+      put3(c.specular, bsdf.specular_reflectance.value);
+    }
     if (fs.shapes_[i].instanced) ds->animated_shapes_.push_back(i);
     if (!ds->bake_shape(fs, i, why_not)) return nullptr;
   }
-  if (!ds->bake_emitters(fs, why_not)) return nullptr;
+  ds->frame_scene_ = &fs;
+  ds->bake_emitters(fs);
   ds->update_view();
   return ds;
 }
@@ -76,7 +122,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
 bool DiffuseScene::refresh(const FrameScene& fs, std::string* why_not) {
   for (size_t i : animated_shapes_)
     if (!bake_shape(fs, i, why_not)) return false;
-  if (!bake_emitters(fs, why_not)) return false;
+  bake_emitters(fs);
   update_view();
   return true;
 }
@@ -88,8 +134,10 @@ bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_n
   // World space for a static shape; object space (placed by to_world) for an animated one.
   const TriangleMesh& m = *s.mesh;
   const Texture& reflectance = scene.bsdfs[size_t(shape.bsdf)].reflectance;
-  const bool textured = !reflectance.is_constant();
-  const Rgb albedo = textured ? Rgb(0.0f) : reflectance.value;
+  const bool textured = (shape_flags_[i] & kShapeTextured) != 0;
+  // A conductor's record carries no reflectance (ConductorRecord has its parameters).
+  const bool diffuse = (shape_flags_[i] & kShapeConductor) == 0;
+  const Rgb albedo = textured || !diffuse ? Rgb(0.0f) : reflectance.value;
   for (size_t t = 0; t < m.triangle_count(); ++t) {
     Vec3f p0 = m.positions[m.indices[3 * t]], p1 = m.positions[m.indices[3 * t + 1]],
           p2 = m.positions[m.indices[3 * t + 2]];
@@ -132,21 +180,36 @@ bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_n
   return true;
 }
 
-bool DiffuseScene::bake_emitters(const FrameScene& fs, std::string* why_not) {
+void DiffuseScene::bake_emitters(const FrameScene& fs) {
   const Scene& scene = fs.scene_;
   emitter_triangles_.clear();
+  emitter_spheres_.clear();
   emitter_first_.assign(scene.emitters.size(), 0);
   emitter_choice_.assign(scene.emitters.size(), nullptr);
+  for (size_t e = 0; e < scene.emitters.size(); ++e) {
+    const Emitter& em = scene.emitters[e];
+    if (em.type != EmitterType::kArea || scene.shapes[size_t(em.shape)].type != ShapeType::kSphere) continue;
+    if (emitter_spheres_.empty()) emitter_spheres_.resize(scene.emitters.size(), SphereEmitterRecord{});
+    const FrameScene::ShapeState& s = fs.shapes_[size_t(em.shape)];
+    SphereEmitterRecord& r = emitter_spheres_[e];
+    put3(r.center, s.center);
+    r.radius = s.radius;
+    put3(r.radiance, em.radiance);
+    r.flip = scene.shapes[size_t(em.shape)].flip_normals ? -1.0f : 1.0f;
+  }
+  // Records only where every emitter is an area emitter on a flat-shaded
+  // mesh; otherwise the kernel asks FrameScene lane by lane.
+  for (const Emitter& em : scene.emitters) {
+    if (em.type != EmitterType::kArea || scene.shapes[size_t(em.shape)].type != ShapeType::kMesh) return;
+    for (const FrameScene::ShapeState::EmitterTriangle& tri : fs.shapes_[size_t(em.shape)].emitter_triangles)
+      if (!tri.face_normal) return;
+  }
   for (size_t e = 0; e < scene.emitters.size(); ++e) {
     const Emitter& em = scene.emitters[e];
     const FrameScene::ShapeState& s = fs.shapes_[size_t(em.shape)];
     emitter_first_[e] = uint32_t(emitter_triangles_.size());
     emitter_choice_[e] = &s.triangle_areas;
     for (const FrameScene::ShapeState::EmitterTriangle& tri : s.emitter_triangles) {
-      if (!tri.face_normal) {
-        *why_not = "emitter " + std::to_string(e) + "'s shape interpolates vertex normals";
-        return false;
-      }
       EmitterTriangleRecord r;
       put3(r.p0, tri.p0);
       put3(r.p1, tri.p1);
@@ -157,7 +220,6 @@ bool DiffuseScene::bake_emitters(const FrameScene& fs, std::string* why_not) {
       emitter_triangles_.push_back(r);
     }
   }
-  return true;
 }
 
 void DiffuseScene::update_view() {
@@ -166,7 +228,11 @@ void DiffuseScene::update_view() {
   view_.shape_first = shape_first_.data();
   view_.shape_flags = shape_flags_.data();
   view_.shape_texture = shape_texture_.data();
-  view_.emitter_triangles = emitter_triangles_.data();
+  view_.shape_conductor = shape_conductor_.data();
+  view_.emitter_triangles = emitter_triangles_.empty() ? nullptr : emitter_triangles_.data();
+  view_.sample_emitter = sample_emitter_lane;
+  view_.emitter_spheres = emitter_spheres_.empty() ? nullptr : emitter_spheres_.data();
+  view_.frame_scene = frame_scene_;
   view_.emitter_first = emitter_first_.data();
   view_.emitter_choice = emitter_choice_.data();
   view_.emitter_count = uint32_t(emitter_first_.size());
@@ -177,6 +243,8 @@ void DiffuseScene::update_view() {
 size_t DiffuseScene::memory_bytes() const {
   return triangles_.size() * sizeof(DiffuseTriangleRecord) + shading_.size() * sizeof(ShadingRecord) +
          emitter_triangles_.size() * sizeof(EmitterTriangleRecord) +
+         shape_conductor_.size() * sizeof(ConductorRecord) +
+         emitter_spheres_.size() * sizeof(SphereEmitterRecord) +
          (shape_first_.size() + shape_flags_.size() + emitter_first_.size()) * sizeof(uint32_t) +
          shape_texture_.size() * sizeof(const Texture*) +
          emitter_choice_.size() * sizeof(const Distribution1D*);

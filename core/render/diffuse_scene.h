@@ -40,7 +40,7 @@ class DiffuseScene {
   DiffuseScene() = default;
   // Shape i's triangle records as interaction() would shade its hits now.
   bool bake_shape(const FrameScene& scene, size_t i, std::string* why_not);
-  bool bake_emitters(const FrameScene& scene, std::string* why_not);
+  void bake_emitters(const FrameScene& scene);
   void update_view();
 
   std::vector<DiffuseTriangleRecord> triangles_;
@@ -48,10 +48,13 @@ class DiffuseScene {
   std::vector<uint32_t> shape_first_;
   std::vector<uint32_t> shape_flags_;
   std::vector<const Texture*> shape_texture_;
+  std::vector<ConductorRecord> shape_conductor_;
   std::vector<size_t> animated_shapes_;
   std::vector<EmitterTriangleRecord> emitter_triangles_;
+  std::vector<SphereEmitterRecord> emitter_spheres_;  // empty without sphere emitters
   std::vector<uint32_t> emitter_first_;
   std::vector<const Distribution1D*> emitter_choice_;
+  const FrameScene* frame_scene_ = nullptr;  // owns these records
   DiffuseSceneView view_;
 };
 

@@ -31,6 +31,7 @@
 #include <cstring>
 
 #include "core/math/distribution.h"
+#include "core/math/elementary.h"  // coefficients only: the functions are repeated below
 #include "core/math/vec.h"
 #include "core/render/diffuse_batch_state.h"
 #include "core/render/ray.h"
@@ -171,6 +172,284 @@ inline V3 cosine_hemisphere(vf ux, vf uy) {
   return {dx, dy, safe_vsqrt(1.0f - dx * dx - dy * dy)};
 }
 
+// ---- core/math/elementary.h on eight lanes, operation for operation ----
+inline vf bits_f(vu b) { return (vf)b; }
+inline vf vfloor(vf x) { return (vf)_mm256_floor_ps((__m256)x); }
+inline vf to_float(vi x) { return __builtin_convertvector(x, vf); }
+inline vi to_int(vf x) { return __builtin_convertvector(x, vi); }
+template <size_t N>
+inline vf vhorner(const float (&c)[N], vf x) {
+  vf p = splat(c[0]);
+  for (size_t i = 1; i < N; ++i) p = p * x + c[i];
+  return p;
+}
+inline vf vcopysign(vf magnitude, vf sign) { return (vf)(((vu)magnitude & 0x7fffffffu) | ((vu)sign & 0x80000000u)); }
+
+// exp_f.
+inline vf vexp(vf x) {
+  using namespace elementary;
+  const vi in_range = (x >= kExpMin) & ~(x > kExpMax);
+  const vf xr = vsel(in_range, x, splat(0.0f));
+  const vf n = vfloor(xr * kLog2e + 0.5f);
+  const vf r = (xr - n * kLn2Hi) - n * kLn2Lo;
+  const vf p = vhorner(kExpPoly, r) * (r * r) + r + 1.0f;
+  const vi ni = to_int(n), half = ni >> 1;
+  const vf y = p * bits_f((vu)(half + 127) << 23u) * bits_f((vu)(ni - half + 127) << 23u);
+  const vf outside = vsel(x > kExpMax, splat(kInfinity), vsel(x < kExpMin, splat(0.0f), x));  // x: NaN
+  return vsel(in_range, y, outside);
+}
+
+// log_f.
+inline vf vlog(vf x0) {
+  using namespace elementary;
+  const vi subnormal = x0 < kMinNormal;
+  const vf x = vsel(subnormal, x0 * 33554432.0f, x0);
+  const vf e_shift = vsel(subnormal, splat(-25.0f), splat(0.0f));
+  const vu bits = (vu)x;
+  vf e = to_float((vi)(bits >> 23u) - 126) + e_shift;
+  vf m = bits_f((bits & 0x007fffffu) | 0x3f000000u);
+  const vi small = m < kSqrtHalf;
+  e = vsel(small, e - 1.0f, e);
+  m = vsel(small, m + m - 1.0f, m - 1.0f);
+  vf y = vhorner(kLogPoly, m) * m * (m * m);
+  y = y + e * kLn2Lo;
+  y = y - 0.5f * (m * m);
+  const vf result = (m + y) + e * kLn2Hi;
+  const vf nan = bits_f(vu{} + 0x7fc00000u);
+  return vsel(x0 > 0.0f, vsel(x0 == kInfinity, x0, result), vsel(x0 == 0.0f, splat(-kInfinity), nan));
+}
+
+// erfc_large (x >= 1; other lanes get values that are thrown away).
+inline vf verfc_large(vf x) {
+  using namespace elementary;
+  const vf e = vexp(-(x * x));
+  const vf q = 1.0f / x;
+  const vf t = q * q;
+  const vf p = vsel(x < 2.0f, vhorner(kErfcNearPoly, t), vhorner(kErfcFarPoly, t));
+  return e * q * p;
+}
+inline vf verf(vf x) {
+  const vf a = vabs(x);
+  const vf small = x * vhorner(elementary::kErfPoly, x * x);
+  return vsel(a > 1.0f, vcopysign(1.0f - verfc_large(vmax(a, splat(1.0f))), x), small);
+}
+inline vf verfc(vf x) {
+  const vf a = vabs(x);
+  const vf small = 1.0f - x * vhorner(elementary::kErfPoly, x * x);
+  const vf y = verfc_large(vmax(a, splat(1.0f)));
+  return vsel(a >= 1.0f, vsel(x < 0.0f, 2.0f - y, y), small);
+}
+
+// erfinv (microfacet.cpp).
+inline vf verfinv(vf x) {
+  vf w = -vlog((1.0f - x) * (1.0f + x));
+  const vi central = w < 5.0f;
+  const vf wc = w - 2.5f;
+  vf pc = splat(2.81022636e-08f);
+  pc = 3.43273939e-07f + pc * wc;
+  pc = -3.5233877e-06f + pc * wc;
+  pc = -4.39150654e-06f + pc * wc;
+  pc = 0.00021858087f + pc * wc;
+  pc = -0.00125372503f + pc * wc;
+  pc = -0.00417768164f + pc * wc;
+  pc = 0.246640727f + pc * wc;
+  pc = 1.50140941f + pc * wc;
+  const vf wt = vsqrt(vsel(central, splat(0.0f), w)) - 3.0f;
+  vf pt = splat(-0.000200214257f);
+  pt = 0.000100950558f + pt * wt;
+  pt = 0.00134934322f + pt * wt;
+  pt = -0.00367342844f + pt * wt;
+  pt = 0.00573950773f + pt * wt;
+  pt = -0.0076224613f + pt * wt;
+  pt = 0.00943887047f + pt * wt;
+  pt = 1.00167406f + pt * wt;
+  pt = 2.83297682f + pt * wt;
+  return vsel(central, pc, pt) * x;
+}
+
+// std::clamp(v, lo, hi).
+inline vf vclamp(vf v, float lo, float hi) { return vsel(v < lo, splat(lo), vsel(hi < v, splat(hi), v)); }
+
+// BeckmannSlopeInversion::solve (beckmann_slope.cpp).
+inline void beckmann_slope(vf cos_theta_i, vf ux, vf uy, vf* slope_x, vf* slope_y) {
+  const vf tan_theta_i = safe_vsqrt(1.0f - cos_theta_i * cos_theta_i) / cos_theta_i;
+  const vf cot_theta_i = 1.0f / tan_theta_i;
+  const vf maxval = verf(cot_theta_i);
+  const vf u_x = vclamp(ux, 1e-6f, 1.0f - 1e-6f);
+  const vf u_y = vclamp(uy, 1e-6f, 1.0f - 1e-6f);
+  vf x = maxval - (maxval + 1.0f) * verf(vsqrt(-vlog(u_x)));
+  const vf target = u_x * (1.0f + maxval + kInvSqrtPi * tan_theta_i * vexp(-(cot_theta_i * cot_theta_i)));
+  for (int i = 0; i < 3; ++i) {  // BeckmannSlopeInversion::kNewtonSteps
+    const vf slope = verfinv(x);
+    const vf value = 1.0f + x + kInvSqrtPi * tan_theta_i * vexp(-(slope * slope)) - target;
+    const vf derivative = 1.0f - slope * tan_theta_i;
+    x -= value / derivative;
+  }
+  *slope_x = verfinv(x);
+  *slope_y = verfinv(2.0f * u_y - 1.0f);
+}
+
+// normalize (vec.h): unchanged where the length is 0.
+inline V3 vnormalize(V3 v) {
+  const vf l2 = vdot(v, v);
+  return vsel3(l2 > 0.0f, v * (1.0f / vsqrt(l2)), v);
+}
+
+// sincos_eighth_turn (sincos.h).
+inline void vsincos_eighth_turn(vf x, vf* sn, vf* cs) {
+  const vf x2 = x * x;
+  *sn = x * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f + x2 * (1.0f / 362880.0f)))));
+  *cs = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f + x2 * (-1.0f / 3628800.0f)))));
+}
+
+// sincos_turns (sincos.h).
+inline void vsincos_turns(vf t, vf* sin_out, vf* cos_out) {
+  const vf k4 = 4.0f * t + 0.5f;
+  vi k = to_int(k4);
+  k += to_float(k) > k4;  // -1 where the truncation rounded up
+  vf sn, cs;
+  vsincos_eighth_turn((t - to_float(k) * 0.25f) * (2.0f * kPi), &sn, &cs);
+  const vi swap = (k & 1) != 0;
+  vu sin_bits = (vu)vsel(swap, cs, sn), cos_bits = (vu)vsel(swap, sn, cs);
+  sin_bits ^= (vu)(k & 2) << 30u;
+  cos_bits ^= (vu)((k + 1) & 2) << 30u;
+  *sin_out = (vf)sin_bits;
+  *cos_out = (vf)cos_bits;
+}
+
+// Doubles, four or eight to a register.
+typedef double vd __attribute__((vector_size(64)));
+inline vd to_double(vf x) { return __builtin_convertvector(x, vd); }
+inline vf to_single(vd x) { return __builtin_convertvector(x, vf); }
+inline vd vsqrt_d(vd x) {
+#if defined(__AVX512F__)
+  return (vd)_mm512_sqrt_pd((__m512d)x);
+#else
+  vd out;
+  const __m256d lo = _mm256_sqrt_pd(_mm256_loadu_pd((const double*)&x));
+  const __m256d hi = _mm256_sqrt_pd(_mm256_loadu_pd((const double*)&x + 4));
+  _mm256_storeu_pd((double*)&out, lo);
+  _mm256_storeu_pd((double*)&out + 4, hi);
+  return out;
+#endif
+}
+typedef int64_t vl __attribute__((vector_size(64)));
+inline vd vsel_d(vl m, vd a, vd b) { return m ? a : b; }
+
+// sphere_point_in_cone (sampling.h): (sin c, cos c), in float where the
+// cone is narrow (sin^2 alpha <= 1/16) and in double elsewhere.
+inline void sphere_point_in_cone(vf sin2_alpha, vf u, vf* sin_c, vf* cos_c) {
+  const vf inv_one_plus_cos_alpha = 1.0f / (1.0f + vsqrt(1.0f - sin2_alpha));
+  const vf one_minus_cos = u * (sin2_alpha * inv_one_plus_cos_alpha);
+  const vf sin2 = one_minus_cos * (2.0f - one_minus_cos), cos_theta = 1.0f - one_minus_cos;
+  const vf x = vmin(splat(1.0f), u * (2.0f - one_minus_cos) * inv_one_plus_cos_alpha);
+  const vf one_minus_cos_c =
+      vmax(splat(0.0f), (sin2 + x * cos_theta * cos_theta) / (1.0f + cos_theta * vsqrt(1.0f - x)) -
+                            x * vsqrt(sin2_alpha));
+  *sin_c = vsqrt(one_minus_cos_c * (2.0f - one_minus_cos_c));
+  *cos_c = 1.0f - one_minus_cos_c;
+  const vi narrow = sin2_alpha <= 1.0f / 16.0f;
+  if (_mm256_testc_si256((__m256i)narrow, _mm256_set1_epi32(-1))) return;
+  const vd sin2_max = to_double(sin2_alpha), inv_sin_max = 1.0 / vsqrt_d(sin2_max);
+  const vd s2 = vsel_d(1.0 < sin2_max, vd{} + 1.0, sin2_max);  // cone_one_minus_cos_from_sin2
+  const vd omc = to_double(u) * (s2 / (1.0 + vsqrt_d(1.0 - s2)));
+  const vd dsin2 = omc * (2.0 - omc), dcos_theta = 1.0 - omc;
+  const vd sin2_over_sin_max = dsin2 * inv_sin_max;
+  const vd r = 1.0 - sin2_over_sin_max * inv_sin_max;
+  const vd dcos_c = sin2_over_sin_max + dcos_theta * vsqrt_d(vsel_d(0.0 < r, r, vd{}));
+  const vd r2 = 1.0 - dcos_c * dcos_c;
+  *sin_c = vsel(narrow, *sin_c, to_single(vsqrt_d(vsel_d(0.0 < r2, r2, vd{}))));
+  *cos_c = vsel(narrow, *cos_c, to_single(dcos_c));
+}
+
+// A rough Beckmann conductor (conductor.cpp, microfacet.cpp) on eight lanes.
+struct VConductor {
+  vf alpha_u, alpha_v;
+  V3 eta, k, specular;
+
+  // MicrofacetDistribution::eval.
+  vf d(V3 m) const {
+    const vf alpha_uv = alpha_u * alpha_v, cos_theta = m.z, cos_theta_2 = cos_theta * cos_theta;
+    const vf mx = m.x / alpha_u, my = m.y / alpha_v;
+    const vf result = vexp(-(mx * mx + my * my) / cos_theta_2) / (kPi * alpha_uv * (cos_theta_2 * cos_theta_2));
+    return vsel(~(cos_theta_2 <= 0.0f) & (result * cos_theta > 1e-20f), result, splat(0.0f));
+  }
+  // MicrofacetDistribution::smith_g1 (Beckmann).
+  vf smith_g1(V3 v, V3 m) const {
+    const vf ux = alpha_u * v.x, vy = alpha_v * v.y;
+    const vf xy_alpha_2 = ux * ux + vy * vy;
+    const vf a = vabs(v.z) / vsqrt(xy_alpha_2);
+    const vf lambda = 0.5f * (vexp(-a * a) * kInvSqrtPi / a - verfc(a));
+    const vf g = 1.0f / (1.0f + lambda);
+    return vsel(vdot(v, m) * v.z <= 0.0f, splat(0.0f),
+                vsel((xy_alpha_2 == 0.0f) | (a >= 9.0f), splat(1.0f), g));
+  }
+  // fresnel_conductor per channel, times specular_reflectance.
+  V3 fresnel(vf cos_theta_i) const {
+    const vf c2 = cos_theta_i * cos_theta_i, s2 = 1.0f - c2, s4 = s2 * s2;
+    auto channel = [&](vf e, vf kk) {
+      const vf temp1 = e * e - kk * kk - s2;
+      const vf a2pb2 = safe_vsqrt(temp1 * temp1 + 4.0f * kk * kk * e * e);
+      const vf a = safe_vsqrt(0.5f * (a2pb2 + temp1));
+      const vf term1 = a2pb2 + c2, term2 = 2.0f * cos_theta_i * a;
+      const vf r_s = (term1 - term2) / (term1 + term2);
+      const vf term3 = a2pb2 * c2 + s4, term4 = term2 * s2;
+      const vf r_p = r_s * (term3 - term4) / (term3 + term4);
+      return 0.5f * (r_s + r_p);
+    };
+    return V3{channel(eta.x, k.x), channel(eta.y, k.y), channel(eta.z, k.z)} * specular;
+  }
+  // rough_conductor_eval_pdf on the front side: the value (zero where the
+  // scalar code returns {}) and the visible-normal pdf.
+  void eval_pdf(V3 wo, V3 wi, V3* value, vf* pdf) const {
+    const V3 h = vnormalize(wo + wi);
+    const vf dh = d(h);
+    const vf g1_o = smith_g1(wo, h);
+    const vf g = g1_o * smith_g1(wi, h);
+    const V3 f = fresnel(vdot(wo, h));
+    const vi valid = ~(wo.z <= 0.0f) & ~(wi.z <= 0.0f) & ~(vdot(wo, h) <= 0.0f) & ~(vdot(wi, h) <= 0.0f) &
+                     ~(dh == 0.0f);
+    const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
+    *value = vsel3(valid, f * (dh * g / (4.0f * wo.z)), zero);
+    *pdf = vsel(valid, dh * g1_o / (4.0f * wo.z), splat(0.0f));
+  }
+  // rough_conductor_sample through Beckmann visible normals, with
+  // bsdf_sample's acceptance: where `ok`, the direction, weight and pdf.
+  vi sample(V3 wo, vf ux, vf uy, V3* wi_out, V3* weight, vf* pdf_out) const {
+    const V3 wi_p = vnormalize(V3{alpha_u * wo.x, alpha_v * wo.y, wo.z});  // stretch
+    vf sx, sy;
+    beckmann_slope(wi_p.z, ux, uy, &sx, &sy);
+    // sincos_phi(wi_p) (microfacet.cpp)
+    const vf sin_theta_2 = 1.0f - wi_p.z * wi_p.z;
+    const vi pole = vabs(sin_theta_2) <= 4.0f * 5.96046448e-8f;
+    const vf inv = 1.0f / vsqrt(sin_theta_2);
+    const vf sin_phi = vsel(pole, splat(0.0f), vclamp(wi_p.y * inv, -1.0f, 1.0f));
+    const vf cos_phi = vsel(pole, splat(1.0f), vclamp(wi_p.x * inv, -1.0f, 1.0f));
+    const vf slope_x = (cos_phi * sx - sin_phi * sy) * alpha_u;
+    const vf slope_y = (sin_phi * sx + cos_phi * sy) * alpha_v;
+    V3 m = vnormalize(V3{-slope_x, -slope_y, splat(1.0f)});
+    const vi m_finite = finite(m.x) & finite(m.y) & finite(m.z);
+    m = vsel3(m_finite, m, V3{splat(0.0f), splat(0.0f), splat(1.0f)});
+    // MicrofacetDistribution::pdf(wo, m) with visible normals.
+    const vf dm = d(m);
+    const vf pdf_visible = dm * smith_g1(wo, m) * vabs(vdot(wo, m)) / wo.z;
+    const vf pdf_m = vsel(m_finite & ~(dm == 0.0f) & ~(wo.z == 0.0f), pdf_visible, splat(0.0f));
+    // reflect_on_microfacet
+    const V3 wi = m * (2.0f * vdot(wo, m)) - wo;
+    const vf wi_dot_m = vdot(wi, m);
+    const vf g = smith_g1(wi, m);
+    const vf pdf = pdf_m / (4.0f * wi_dot_m);
+    *weight = fresnel(vdot(wo, m)) * g;
+    *wi_out = wi;
+    *pdf_out = pdf;
+    vi ok = ~(wo.z <= 0.0f) & (pdf_m > 0.0f) & ~(wi.z <= 0.0f) & (wi_dot_m > 0.0f) & (pdf > 0.0f);
+    // accept_sample (bsdf.cpp)
+    ok &= finite(weight->x) & finite(weight->y) & finite(weight->z) & finite(pdf) & finite(wi.x) & finite(wi.y) &
+          finite(wi.z);
+    return ok;
+  }
+};
+
 void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi shade) {
   VPcg32 rng{load<vu64>(&st->rng_state[k]), load<vu64>(&st->rng_inc[k])};
   V3 throughput = load3(st->throughput, k);
@@ -242,62 +521,173 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   // mirrors both directions to the front, and a sample back again.
   const vi mirrored = ((flags & kShapeTwoSided) != 0u) & ~(wo_z >= 0.0f);
   const vf wo_front_z = vsel(mirrored, -wo_z, wo_z);
+  // Lanes on a rough conductor: its parameters, and wo in the shading frame
+  // (si.wi, mirrored to the front).
+  const vi conductor = shade & ((flags & kShapeConductor) != 0u);
+  const bool any_conductor = !_mm256_testz_si256((__m256i)conductor, (__m256i)conductor);
+  VConductor cond{};
+  V3 wo_local{};
+  if (any_conductor) {
+    uint32_t shape_lanes[kLanes];
+    for (int i = 0; i < kLanes; ++i) shape_lanes[i] = conductor[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
+    const RecordLanes c = load_records(scene.shape_conductor, shape_lanes);
+    cond.alpha_u = c.f[0];
+    cond.alpha_v = c.f[1];
+    cond.eta = V3{c.f[2], c.f[3], c.f[4]};
+    cond.k = V3{c.f[5], c.f[6], c.f[7]};
+    cond.specular = V3{c.f[8], c.f[9], c.f[10]};
+    wo_local = V3{vdot(wo_world, fs), vdot(wo_world, ft), wo_front_z};
+  }
 
-  // ---- sample_emitter: a uniform emitter, an area-weighted triangle, a point ----
+  // ---- sample_emitter ----
   const vf u_select = rng.next_float(shade);
   const vf ux = rng.next_float(shade), uy = rng.next_float(shade);
-  uint32_t etri[kLanes];
-  alignas(32) float u_tri_lanes[kLanes];
-  for (int i = 0; i < kLanes; ++i) {
-    etri[i] = 0;
-    u_tri_lanes[i] = 0.0f;
-    if (!shade[i]) continue;
-    const float scaled = u_select[i] * float(scene.emitter_count);
-    uint32_t index = uint32_t(scaled);
-    if (index > scene.emitter_count - 1) index = scene.emitter_count - 1;
-    float u_tri;
-    const size_t t = scene.emitter_choice[index]->sample(ux[i], &u_tri);
-    etri[i] = scene.emitter_first[index] + uint32_t(t);
-    u_tri_lanes[i] = u_tri;
+  V3 es_d{}, weight{};
+  vf dist{}, es_pdf{};
+  vi sampled, delta = vi{};
+  if (scene.emitter_triangles) {
+    // A uniform emitter, an area-weighted triangle, a point on it.
+    uint32_t etri[kLanes];
+    alignas(32) float u_tri_lanes[kLanes];
+    for (int i = 0; i < kLanes; ++i) {
+      etri[i] = 0;
+      u_tri_lanes[i] = 0.0f;
+      if (!shade[i]) continue;
+      const float scaled = u_select[i] * float(scene.emitter_count);
+      uint32_t index = uint32_t(scaled);
+      if (index > scene.emitter_count - 1) index = scene.emitter_count - 1;
+      float u_tri;
+      const size_t t = scene.emitter_choice[index]->sample(ux[i], &u_tri);
+      etri[i] = scene.emitter_first[index] + uint32_t(t);
+      u_tri_lanes[i] = u_tri;
+    }
+    const RecordLanes e = load_records(scene.emitter_triangles, etri);
+    const V3 lp0{e.f[0], e.f[1], e.f[2]}, lp1{e.f[3], e.f[4], e.f[5]}, lp2{e.f[6], e.f[7], e.f[8]};
+    const V3 ln{e.f[9], e.f[10], e.f[11]}, radiance{e.f[12], e.f[13], e.f[14]};
+    const vf area = e.f[15];
+    const vf tt = safe_vsqrt(1.0f - load<vf>(u_tri_lanes));  // square_to_uniform_triangle
+    const vf lb1 = 1.0f - tt, lb2 = tt * uy;
+    const V3 lp = lp0 * (1.0f - lb1 - lb2) + lp1 * lb1 + lp2 * lb2;
+    const V3 to_light = lp - p;
+    const vf dist2 = vdot(to_light, to_light);
+    dist = vsqrt(dist2);
+    const vf abs_dn = vabs(vdot(to_light, ln));
+    const vf pdf_solid_angle = vsel(abs_dn > 0.0f, dist2 * (dist / (area * abs_dn)), splat(0.0f));
+    sampled = (dist > 0.0f) & (pdf_solid_angle > 0.0f) & finite(pdf_solid_angle);
+    es_d = to_light * (1.0f / dist);
+    es_pdf = pdf_solid_angle * scene.select_pdf;
+    weight = vsel3(vdot(ln, es_d) < 0.0f, radiance * (1.0f / es_pdf), V3{splat(0.0f), splat(0.0f), splat(0.0f)});
+  } else {
+    // A uniform emitter; a sphere's from outside it here (FrameScene::
+    // sample_emitter_direction's cone sampling), other emitters (points,
+    // spots, directional lights, smooth area lights, a point inside a
+    // sphere) by FrameScene itself, lane by lane.
+    vi here = vi{};
+    if (scene.emitter_spheres) {
+      uint32_t index[kLanes];
+      for (int i = 0; i < kLanes; ++i) {
+        const uint32_t e = uint32_t(u_select[i] * float(scene.emitter_count));
+        index[i] = shade[i] ? (e < scene.emitter_count - 1 ? e : scene.emitter_count - 1) : 0u;
+      }
+      const RecordLanes sp = load_records(scene.emitter_spheres, index);
+      const V3 center{sp.f[0], sp.f[1], sp.f[2]}, radiance{sp.f[4], sp.f[5], sp.f[6]};
+      const vf radius = sp.f[3], flip = sp.f[7];
+      const V3 dc = center - p;
+      const vf dc2 = vdot(dc, dc), r2 = radius * radius;
+      here = shade & (radius > 0.0f) & (dc2 > r2 * (1.0f + 1e-5f));
+      if (!_mm256_testz_si256((__m256i)here, (__m256i)here)) {
+        vf sin_c, cos_c, sin_phi, cos_phi;
+        sphere_point_in_cone(r2 / dc2, uy, &sin_c, &cos_c);
+        vsincos_turns(ux, &sin_phi, &cos_phi);
+        const V3 wz = dc * (1.0f / vsqrt(dc2));  // Frame(wz), z towards the centre
+        const vf fsign = (vf)(((vu)wz.z & 0x80000000u) | 0x3f800000u);
+        const vf fa = -1.0f / (fsign + wz.z);
+        const vf fb = wz.x * wz.y * fa;
+        const V3 fx{1.0f + fsign * wz.x * wz.x * fa, fsign * fb, -fsign * wz.x};
+        const V3 fy{fb, fsign + wz.y * wz.y * fa, -wz.y};
+        V3 ln = fx * (-sin_c * cos_phi) + fy * (-sin_c * sin_phi) + wz * (-cos_c);
+        const V3 lp = center + ln * radius;
+        const vd dc2d = to_double(dc2), r2d = to_double(radius) * to_double(radius);
+        const vd diff = dc2d - r2d;
+        const vf pdf_solid_angle =
+            to_single((dc2d + vsqrt_d(dc2d * vsel_d(0.0 < diff, diff, vd{}))) / (2.0 * double(kPi) * r2d));
+        ln = vsel3(flip < 0.0f, -ln, ln);
+        const V3 to_light = lp - p;
+        const vf sdist = vsqrt(vdot(to_light, to_light));
+        const vi ok = (sdist > 0.0f) & (pdf_solid_angle > 0.0f) & finite(pdf_solid_angle);
+        const V3 sd = to_light * (1.0f / sdist);
+        const vf spdf = pdf_solid_angle * scene.select_pdf;
+        const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
+        es_d = vsel3(here, sd, zero);
+        dist = vsel(here, sdist, splat(0.0f));
+        es_pdf = vsel(here, spdf, splat(0.0f));
+        weight = vsel3(here & ok & (vdot(ln, sd) < 0.0f), radiance * (1.0f / spdf), zero);
+      }
+    }
+    alignas(32) float d[3][kLanes], w[3][kLanes], dist_lanes[kLanes], pdf_lanes[kLanes];
+    alignas(32) int32_t delta_lanes[kLanes];
+    const vi elsewhere = shade & ~here;
+    if (!_mm256_testz_si256((__m256i)elsewhere, (__m256i)elsewhere)) {
+      for (int i = 0; i < kLanes; ++i) {
+        EmitterSampleLane es{};
+        if (elsewhere[i]) {
+          const float pl[3] = {p.x[i], p.y[i], p.z[i]};
+          scene.sample_emitter(scene.frame_scene, pl, u_select[i], ux[i], uy[i], &es);
+        }
+        d[0][i] = es.d[0], d[1][i] = es.d[1], d[2][i] = es.d[2];
+        w[0][i] = es.weight[0], w[1][i] = es.weight[1], w[2][i] = es.weight[2];
+        dist_lanes[i] = es.dist;
+        pdf_lanes[i] = es.pdf;
+        delta_lanes[i] = es.delta;
+      }
+      es_d = vsel3(here, es_d, V3{load<vf>(d[0]), load<vf>(d[1]), load<vf>(d[2])});
+      weight = vsel3(here, weight, V3{load<vf>(w[0]), load<vf>(w[1]), load<vf>(w[2])});
+      dist = vsel(here, dist, load<vf>(dist_lanes));
+      es_pdf = vsel(here, es_pdf, load<vf>(pdf_lanes));
+      delta = load<vi>(delta_lanes);
+    }
+    sampled = shade;  // the weight is zero where nothing was sampled
   }
-  const RecordLanes e = load_records(scene.emitter_triangles, etri);
-  const V3 lp0{e.f[0], e.f[1], e.f[2]}, lp1{e.f[3], e.f[4], e.f[5]}, lp2{e.f[6], e.f[7], e.f[8]};
-  const V3 ln{e.f[9], e.f[10], e.f[11]}, radiance{e.f[12], e.f[13], e.f[14]};
-  const vf area = e.f[15];
-  const vf tt = safe_vsqrt(1.0f - load<vf>(u_tri_lanes));  // square_to_uniform_triangle
-  const vf lb1 = 1.0f - tt, lb2 = tt * uy;
-  const V3 lp = lp0 * (1.0f - lb1 - lb2) + lp1 * lb1 + lp2 * lb2;
-  const V3 to_light = lp - p;
-  const vf dist2 = vdot(to_light, to_light);
-  const vf dist = vsqrt(dist2);
-  const vf abs_dn = vabs(vdot(to_light, ln));
-  const vf pdf_solid_angle = vsel(abs_dn > 0.0f, dist2 * (dist / (area * abs_dn)), splat(0.0f));
-  const vi sampled = (dist > 0.0f) & (pdf_solid_angle > 0.0f) & finite(pdf_solid_angle);
-  const V3 es_d = to_light * (1.0f / dist);
-  const vf es_pdf = pdf_solid_angle * scene.select_pdf;
-  const V3 weight = vsel3(vdot(ln, es_d) < 0.0f, radiance * (1.0f / es_pdf), V3{splat(0.0f), splat(0.0f), splat(0.0f)});
 
-  // ---- connect_emitter: the diffuse BSDF towards it, MIS, the shadow ray ----
+  // ---- connect_emitter: the BSDF towards it, MIS, the shadow ray ----
   const vf wl_z = vsel(mirrored, -vdot(es_d, ns), vdot(es_d, ns));
   // diffuse_eval_pdf's test is `wo.z <= 0 || wi.z <= 0`, kept as written for NaN.
-  const vi lit = shade & sampled & ~is_black(weight) & ~(wo_front_z <= 0.0f) & ~(wl_z <= 0.0f);
-  const vf bsdf_pdf = kInvPi * wl_z;
-  const V3 f = albedo * bsdf_pdf;
+  const vi diffuse_lit = ~(wo_front_z <= 0.0f) & ~(wl_z <= 0.0f);
+  vf bsdf_pdf = kInvPi * wl_z;
+  V3 f = albedo * bsdf_pdf;
+  if (any_conductor) {
+    V3 fc;
+    vf pc;
+    cond.eval_pdf(wo_local, V3{vdot(es_d, fs), vdot(es_d, ft), wl_z}, &fc, &pc);
+    f = vsel3(conductor, fc, f);
+    bsdf_pdf = vsel(conductor, pc, bsdf_pdf);
+  }
+  const vi lit = shade & sampled & ~is_black(weight) & (conductor | diffuse_lit);
   const vi connect = lit & ~is_black(f);
-  const vf w = mis_power(es_pdf, bsdf_pdf);
+  const vf w = vsel(delta, splat(1.0f), mis_power(es_pdf, bsdf_pdf));
   store3(st->shadow_contribution, k, throughput * f * weight * w, connect);
   store3(st->shadow_o, k, offset_p(p, offset_floor, n, es_d), connect);
   store3(st->shadow_d, k, es_d, connect);
-  store1(st->shadow_tmax, k, dist * (1.0f - kShadowEpsilon), connect);
+  store1(st->shadow_tmax, k, vsel(dist == kInfinity, splat(kInfinity), dist * (1.0f - kShadowEpsilon)), connect);
   store1(st->shadow_pending, k, connect, shade);
 
   // ---- draw_bsdf_numbers, then sample_bsdf_drawn ----
   (void)rng.next_float(shade);  // u_lobe: one lobe
   const vf vx = rng.next_float(shade), vy = rng.next_float(shade);
-  const V3 wi = cosine_hemisphere(vx, vy);
-  const vf pdf = kInvPi * wi.z;
-  vi alive = shade & ~(wo_front_z <= 0.0f) & (pdf > 0.0f) & ~is_black(albedo);
-  throughput = vsel3(alive, throughput * albedo, throughput);
+  V3 wi = cosine_hemisphere(vx, vy);
+  vf pdf = kInvPi * wi.z;
+  vi alive = shade & ~conductor & ~(wo_front_z <= 0.0f) & (pdf > 0.0f) & ~is_black(albedo);
+  V3 bsdf_weight = albedo;
+  if (any_conductor) {
+    V3 wi_c, weight_c;
+    vf pdf_c;
+    const vi ok = cond.sample(wo_local, vx, vy, &wi_c, &weight_c, &pdf_c);
+    alive |= conductor & ok & ~is_black(weight_c);
+    wi = vsel3(conductor, wi_c, wi);
+    bsdf_weight = vsel3(conductor, weight_c, bsdf_weight);
+    pdf = vsel(conductor, pdf_c, pdf);
+  }
+  throughput = vsel3(alive, throughput * bsdf_weight, throughput);
   const V3 next_d = fs * wi.x + ft * wi.y + ns * vsel(mirrored, -wi.z, wi.z);  // Frame::to_world
   store3(st->o, k, offset_p(p, offset_floor, n, next_d), alive);
   store3(st->d, k, next_d, alive);

@@ -101,15 +101,37 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   ASSERT_TRUE(room);
   EXPECT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
 
+  // Rough conductors are shaded by the kernel, the sphere lights by the
+  // scalar stages (kShapeScalar), and next-event estimation asks FrameScene.
   auto veach = load_test_scene("veach-mis", kW, kH);
   ASSERT_TRUE(veach);
-  EXPECT_EQ(veach->scene->diffuse_scene(), nullptr);
-  EXPECT_NE(veach->scene->why_not_diffuse().find("shape"), std::string::npos) << veach->scene->why_not_diffuse();
+  ASSERT_NE(veach->scene->diffuse_scene(), nullptr) << veach->scene->why_not_diffuse();
+  const DiffuseSceneView& vv = veach->scene->diffuse_scene()->view();
+  EXPECT_EQ(vv.emitter_triangles, nullptr);
+  int conductors = 0, scalar = 0;
+  for (size_t i = 0; i < veach->desc.shapes.size(); ++i) {
+    conductors += (vv.shape_flags[i] & kShapeConductor) != 0;
+    scalar += (vv.shape_flags[i] & kShapeScalar) != 0;
+  }
+  EXPECT_EQ(conductors, 4);
+  EXPECT_EQ(scalar, 3);  // the three sphere lights
   auto matpreview = load_test_scene("matpreview", kW, kH);
   ASSERT_TRUE(matpreview);
   EXPECT_EQ(matpreview->scene->diffuse_scene(), nullptr);
-  EXPECT_NE(matpreview->scene->why_not_diffuse().find("not an area emitter"), std::string::npos)
+  EXPECT_NE(matpreview->scene->why_not_diffuse().find("is an environment"), std::string::npos)
       << matpreview->scene->why_not_diffuse();
+  // Nothing for the kernel to shade: the scalar batch renders it.
+  auto none = load_mitsuba_scene_from_string(R"(<scene version="3.0.0">
+    <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+    <shape type="cube"><bsdf type="plastic"/></shape>
+    <shape type="sphere"><float name="radius" value="0.2"/><emitter type="area"><rgb name="radiance" value="1, 1, 1"/></emitter></shape>
+  </scene>)", std::filesystem::temp_directory_path().string(), LoadOptions{});
+  ASSERT_TRUE(none.ok()) << none.status().to_string();
+  auto none_scene = FrameScene::create(none.value(), {});
+  ASSERT_TRUE(none_scene.ok());
+  EXPECT_EQ(none_scene.value()->diffuse_scene(), nullptr);
+  EXPECT_NE(none_scene.value()->why_not_diffuse().find("no shape is a triangle mesh"), std::string::npos)
+      << none_scene.value()->why_not_diffuse();
 
   // What the frame statistics say was left out.
   PathTracerSettings settings;
@@ -222,6 +244,91 @@ TEST(DiffuseBatchTest, CboxPathsMatchTheScalarBatchBitForBit) {
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*ts->scene, v, kW, kH);
 }
 
+TEST(DiffuseBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
+  auto ts = load_test_scene("veach-mis", kW, kH);
+  ASSERT_TRUE(ts);
+  if (!diffuse_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*ts->scene, v, kW, kH);
+}
+
+// The room with glossy panels: rough Beckmann conductors (two-sided and
+// one-sided, isotropic and anisotropic, from nearly smooth to rough, one
+// with a roughness under the 1e-4 floor), lit by a sphere light, a point
+// light, a spot light and a directional light (blocked by the walls: its
+// shadow rays are unbounded); a plastic cube and a diffuse sphere are shaded
+// by the scalar stages.
+std::unique_ptr<FrameScene> load_glossy_room(Scene* desc) {
+  const std::string conductor = R"(<string name="distribution" value="beckmann"/>
+      <rgb name="specular_reflectance" value="0.9, 0.8, 0.6"/>
+      <rgb name="eta" value="0.200438, 0.924033, 1.10221"/><rgb name="k" value="3.91295, 2.45285, 2.14219"/>)";
+  const std::string xml = R"(<scene version="3.0.0">
+  <sensor type="perspective">
+    <float name="fov" value="80"/>
+    <transform name="to_world"><lookat origin="0, 0, -0.9" target="0, -0.2, 1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
+  </sensor>
+  <shape type="cube"><boolean name="flip_normals" value="true"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.5"/></bsdf></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.35"/><rotate x="1" angle="80"/><translate x="-0.4" y="-0.7" z="0.4"/></transform>
+    <bsdf type="twosided"><bsdf type="roughconductor"><float name="alpha" value="0.05"/>)" + conductor + R"(</bsdf></bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.3"/><rotate y="1" angle="60"/><translate x="0.5" y="-0.2" z="0.5"/></transform>
+    <bsdf type="roughconductor"><float name="alpha_u" value="0.3"/><float name="alpha_v" value="0.08"/>)" + conductor + R"(</bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.25"/><rotate x="1" angle="-30"/><translate x="0.1" y="0.3" z="0.8"/></transform>
+    <bsdf type="twosided"><bsdf type="roughconductor"><float name="alpha" value="0.00001"/>)" + conductor + R"(</bsdf></bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.3"/><translate x="-0.5" y="0.2" z="0.7"/></transform>
+    <bsdf type="twosided"><bsdf type="roughconductor"><float name="alpha" value="0.6"/>)" + conductor + R"(</bsdf></bsdf>
+  </shape>
+  <shape type="cube">
+    <transform name="to_world"><scale value="0.15"/><rotate y="1" angle="30"/><translate x="0.2" y="-0.8" z="0.2"/></transform>
+    <bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.8"/></bsdf>
+  </shape>
+  <shape type="sphere">
+    <point name="center" x="-0.1" y="-0.75" z="0.6"/><float name="radius" value="0.2"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.3"/></bsdf>
+  </shape>
+  <shape type="sphere">
+    <point name="center" x="0.3" y="0.7" z="0.3"/><float name="radius" value="0.1"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="40, 30, 20"/></emitter>
+  </shape>
+  <emitter type="point"><point name="position" x="-0.5" y="0.6" z="0.0"/><rgb name="intensity" value="1, 2, 3"/></emitter>
+  <emitter type="spot">
+    <transform name="to_world"><lookat origin="0.6, 0.6, -0.5" target="0, -1, 0.5" up="0, 1, 0"/></transform>
+    <rgb name="intensity" value="5, 5, 5"/><float name="cutoff_angle" value="30"/><float name="beam_width" value="20"/>
+  </emitter>
+  <emitter type="directional"><vector name="direction" x="0.3" y="-1" z="0.2"/><rgb name="irradiance" value="2, 2, 2"/></emitter>
+</scene>)";
+  auto loaded = load_mitsuba_scene_from_string(xml, std::filesystem::temp_directory_path().string(), LoadOptions{});
+  EXPECT_TRUE(loaded.ok()) << loaded.status().to_string();
+  if (!loaded.ok()) return nullptr;
+  *desc = std::move(loaded.value());
+  auto fs = FrameScene::create(*desc, {});
+  EXPECT_TRUE(fs.ok()) << fs.status().to_string();
+  return fs.ok() ? std::move(fs.value()) : nullptr;
+}
+
+TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
+  Scene desc;
+  auto room = load_glossy_room(&desc);
+  ASSERT_TRUE(room);
+  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  const DiffuseSceneView& view = room->diffuse_scene()->view();
+  EXPECT_EQ(view.emitter_triangles, nullptr);
+  for (size_t i : {1, 2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapeConductor, 0u) << "shape " << i;
+  for (size_t i : {5, 6, 7}) EXPECT_NE(view.shape_flags[i] & kShapeScalar, 0u) << "shape " << i;
+  EXPECT_EQ(view.shape_conductor[4].alpha_u, 0.6f);
+  EXPECT_EQ(view.shape_conductor[3].alpha_u, 1e-4f);  // MicrofacetDistribution's floor
+  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
+}
+
 TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
   Scene desc;
   auto room = load_room(&desc);
@@ -233,7 +340,7 @@ TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
 // A caller that skips diffuse_batch_available() still gets the scalar
 // batch's paths, not a crash, on a scene without records.
 TEST(DiffuseBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
-  auto ts = load_test_scene("veach-mis", kW, kH);
+  auto ts = load_test_scene("matpreview", kW, kH);
   ASSERT_TRUE(ts);
   ASSERT_EQ(ts->scene->diffuse_scene(), nullptr);
   std::vector<PathState> scalar_paths, vector_paths;
@@ -321,8 +428,9 @@ TEST_P(DiffuseRenderTest, RenderIsTheSameWithAndWithoutTheVectorKernel) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, DiffuseRenderTest,
-                         ::testing::Values("cbox/cbox-rgb.xml", "cornell-box/scene.xml", "stiff/degenerate.xml",
-                                           "stiff/furnace.xml", "stiff/inside_object.xml"),
+                         ::testing::Values("cbox/cbox-rgb.xml", "cornell-box/scene.xml", "veach-mis/scene.xml",
+                                           "stiff/degenerate.xml", "stiff/furnace.xml", "stiff/inside_object.xml",
+                                           "stiff/rough_conductor.xml", "stiff/tiny_light.xml", "stiff/scaled.xml"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string name = info.param.substr(0, info.param.find('.'));
                            for (char& c : name)
