@@ -174,26 +174,37 @@ inline V3 cosine_hemisphere(vf ux, vf uy) {
 
 // ---- core/math/elementary.h on eight lanes, operation for operation ----
 inline vf bits_f(vu b) { return (vf)b; }
-inline vf vfloor(vf x) { return (vf)_mm256_floor_ps((__m256)x); }
 inline vf to_float(vi x) { return __builtin_convertvector(x, vf); }
 inline vi to_int(vf x) { return __builtin_convertvector(x, vi); }
+// elementary::polynomial (Estrin's scheme), term for term.
 template <size_t N>
-inline vf vhorner(const float (&c)[N], vf x) {
-  vf p = splat(c[0]);
-  for (size_t i = 1; i < N; ++i) p = p * x + c[i];
-  return p;
+inline vf vpolynomial(const float (&c)[N], vf x) {
+  vf b[N];
+  for (size_t k = 0; k < N; ++k) b[k] = splat(c[N - 1 - k]);
+  size_t n = N;
+  vf power = x;
+  while (n > 1) {
+    size_t m = 0;
+    for (size_t j = 0; j + 1 < n; j += 2) b[m++] = b[j] + b[j + 1] * power;
+    if (n & 1) b[m++] = b[n - 1];
+    n = m;
+    power = power * power;
+  }
+  return b[0];
 }
 inline vf vcopysign(vf magnitude, vf sign) { return (vf)(((vu)magnitude & 0x7fffffffu) | ((vu)sign & 0x80000000u)); }
 
 // exp_f.
 inline vf vexp(vf x) {
   using namespace elementary;
-  const vi in_range = (x >= kExpMin) & ~(x > kExpMax);
+  const vi in_range = (x >= kExpMin) & (x <= kExpMax);
   const vf xr = vsel(in_range, x, splat(0.0f));
-  const vf n = vfloor(xr * kLog2e + 0.5f);
+  const vf shifted = xr * kLog2e + kRoundMagic;
+  const vf n = shifted - kRoundMagic;
+  const vi ni = (vi)((vu)shifted - kRoundMagicBits);
   const vf r = (xr - n * kLn2Hi) - n * kLn2Lo;
-  const vf p = vhorner(kExpPoly, r) * (r * r) + r + 1.0f;
-  const vi ni = to_int(n), half = ni >> 1;
+  const vf p = vpolynomial(kExpPoly, r) * (r * r) + r + 1.0f;
+  const vi half = ni >> 1;
   const vf y = p * bits_f((vu)(half + 127) << 23u) * bits_f((vu)(ni - half + 127) << 23u);
   const vf outside = vsel(x > kExpMax, splat(kInfinity), vsel(x < kExpMin, splat(0.0f), x));  // x: NaN
   return vsel(in_range, y, outside);
@@ -211,7 +222,7 @@ inline vf vlog(vf x0) {
   const vi small = m < kSqrtHalf;
   e = vsel(small, e - 1.0f, e);
   m = vsel(small, m + m - 1.0f, m - 1.0f);
-  vf y = vhorner(kLogPoly, m) * m * (m * m);
+  vf y = vpolynomial(kLogPoly, m) * m * (m * m);
   y = y + e * kLn2Lo;
   y = y - 0.5f * (m * m);
   const vf result = (m + y) + e * kLn2Hi;
@@ -225,17 +236,17 @@ inline vf verfc_large(vf x) {
   const vf e = vexp(-(x * x));
   const vf q = 1.0f / x;
   const vf t = q * q;
-  const vf p = vsel(x < 2.0f, vhorner(kErfcNearPoly, t), vhorner(kErfcFarPoly, t));
+  const vf p = vsel(x < 2.0f, vpolynomial(kErfcNearPoly, t), vpolynomial(kErfcFarPoly, t));
   return e * q * p;
 }
 inline vf verf(vf x) {
   const vf a = vabs(x);
-  const vf small = x * vhorner(elementary::kErfPoly, x * x);
+  const vf small = x * vpolynomial(elementary::kErfPoly, x * x);
   return vsel(a > 1.0f, vcopysign(1.0f - verfc_large(vmax(a, splat(1.0f))), x), small);
 }
 inline vf verfc(vf x) {
   const vf a = vabs(x);
-  const vf small = 1.0f - x * vhorner(elementary::kErfPoly, x * x);
+  const vf small = 1.0f - x * vpolynomial(elementary::kErfPoly, x * x);
   const vf y = verfc_large(vmax(a, splat(1.0f)));
   return vsel(a >= 1.0f, vsel(x < 0.0f, 2.0f - y, y), small);
 }
