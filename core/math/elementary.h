@@ -69,20 +69,31 @@ constexpr float kErfcFarPoly[] = {-1.047766399936249e+1f, 1.297719955372516e+1f,
 // pairs of pairs with x^2, x^4, ...: four dependent multiply-adds for nine
 // coefficients instead of Horner's eight, which made the scalar functions
 // latency-bound in the path tracer's dependent chains.
+//
+// Each level is its own fixed-size array with loops of constant trip count,
+// so that the compiler keeps every term in a register (with one array and a
+// loop over the levels, GCC kept them on the stack, and each multiply-add
+// waited on a store and a load).
+template <size_t N>
+struct Estrin {
+  // b lowest degree first, power = x^(2^level).
+  static float eval(const float (&b)[N], float power) {
+    float next[(N + 1) / 2];
+    for (size_t j = 0; j < N / 2; ++j) next[j] = b[2 * j] + b[2 * j + 1] * power;
+    if (N % 2 == 1) next[N / 2] = b[N - 1];
+    return Estrin<(N + 1) / 2>::eval(next, power * power);
+  }
+};
+template <>
+struct Estrin<1> {
+  static float eval(const float (&b)[1], float) { return b[0]; }
+};
+
 template <size_t N>
 inline float polynomial(const float (&c)[N], float x) {
   float b[N];
   for (size_t k = 0; k < N; ++k) b[k] = c[N - 1 - k];  // lowest degree first
-  size_t n = N;
-  float power = x;
-  while (n > 1) {
-    size_t m = 0;
-    for (size_t j = 0; j + 1 < n; j += 2) b[m++] = b[j] + b[j + 1] * power;
-    if (n & 1) b[m++] = b[n - 1];
-    n = m;
-    power = power * power;
-  }
-  return b[0];
+  return Estrin<N>::eval(b, x);
 }
 
 // exp's argument is rounded to an integer n by adding and subtracting

@@ -178,19 +178,23 @@ inline vf to_float(vi x) { return __builtin_convertvector(x, vf); }
 inline vi to_int(vf x) { return __builtin_convertvector(x, vi); }
 // elementary::polynomial (Estrin's scheme), term for term.
 template <size_t N>
+struct VEstrin {
+  static vf eval(const vf (&b)[N], vf power) {
+    vf next[(N + 1) / 2];
+    for (size_t j = 0; j < N / 2; ++j) next[j] = b[2 * j] + b[2 * j + 1] * power;
+    if (N % 2 == 1) next[N / 2] = b[N - 1];
+    return VEstrin<(N + 1) / 2>::eval(next, power * power);
+  }
+};
+template <>
+struct VEstrin<1> {
+  static vf eval(const vf (&b)[1], vf) { return b[0]; }
+};
+template <size_t N>
 inline vf vpolynomial(const float (&c)[N], vf x) {
   vf b[N];
   for (size_t k = 0; k < N; ++k) b[k] = splat(c[N - 1 - k]);
-  size_t n = N;
-  vf power = x;
-  while (n > 1) {
-    size_t m = 0;
-    for (size_t j = 0; j + 1 < n; j += 2) b[m++] = b[j] + b[j + 1] * power;
-    if (n & 1) b[m++] = b[n - 1];
-    n = m;
-    power = power * power;
-  }
-  return b[0];
+  return VEstrin<N>::eval(b, x);
 }
 inline vf vcopysign(vf magnitude, vf sign) { return (vf)(((vu)magnitude & 0x7fffffffu) | ((vu)sign & 0x80000000u)); }
 
