@@ -223,7 +223,7 @@ class JobRenderer {
       if (r.invalid_samples > 0) st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples dropped");
       st.left_out.push_back("gradient sampling and reconstruction: integrator pt");
       const std::string scalar_why = why_no_diffuse_batch(*scene_, pj_.render.path, pj_.render.paths_in_flight);
-      if (!scalar_why.empty()) st.left_out.push_back("the diffuse path batch's AVX2 kernel: " + scalar_why);
+      if (!scalar_why.empty()) st.left_out.push_back("the vector path batch's AVX2/AVX-512 kernel: " + scalar_why);
     }
     st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);
     st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;

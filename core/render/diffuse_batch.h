@@ -1,14 +1,19 @@
 // The path batch (path_batch.h) for a scene that FrameScene laid out as
-// diffuse records (diffuse_scene.h): the paths' state as struct of arrays,
-// each vertex shaded eight paths at a time by an AVX2 or AVX-512 kernel
-// (diffuse_vertex_kernel.inl), the rays cast as the scalar batch casts them.
-// Every path's radiance is the scalar batch's bit for bit, so an image does
-// not depend on which CPU rendered it. Paths hand over to the scalar stages
-// for what the kernel leaves out: emission seen along a ray (a few per cent
-// of hits, scalar either way) and the last ray under max_depth.
+// records (diffuse_scene.h): the paths' state as struct of arrays, each
+// vertex on a diffuse or rough Beckmann conductor triangle shaded eight
+// paths at a time by an AVX2 or AVX-512 kernel (diffuse_vertex_kernel.inl;
+// "diffuse" for the BSDF it began with), the rays cast as the scalar batch
+// casts them. Every path's radiance is the scalar batch's bit for bit, so an
+// image does not depend on which CPU rendered it. Paths hand over to the
+// scalar stages for what the kernel leaves out: emission seen along a ray (a
+// few per cent of hits, scalar either way), whole vertices on shapes it does
+// not shade (spheres, other BSDFs: kShapeScalar), and the last ray under
+// max_depth. Next-event estimation towards emitters other than triangle and
+// sphere area lights calls FrameScene's own sampling lane by lane.
 //
 // On cbox this made the path tracer's own code per ray about 1.9x faster
-// (docs/foundation.md, fifteenth round).
+// (docs/foundation.md, fifteenth round); on veach-mis, with conductors and
+// sphere lights, 1.33x faster renders (sixteenth round).
 #pragma once
 
 #include <string>

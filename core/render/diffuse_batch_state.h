@@ -148,9 +148,9 @@ struct alignas(64) DiffuseBatchState {
   alignas(64) int32_t shadow_pending[kDiffuseBatch];  // -1 or 0
 };
 
-// One diffuse vertex for every lane marked in state->shade: the hit's
-// shading, next-event estimation towards the area emitters, the cosine-
-// weighted bounce and Russian roulette, with path_stages.h's arithmetic in
+// One vertex for every lane marked in state->shade (a diffuse or rough
+// conductor triangle): the hit's shading, next-event estimation, the
+// BSDF's bounce and Russian roulette, with path_stages.h's arithmetic in
 // its order, so every lane comes out bit for bit as sample_emitter,
 // connect_emitter and sample_bsdf leave a PathState. One entry point per
 // instruction set (diffuse_vertex_kernel.inl), each callable only where the

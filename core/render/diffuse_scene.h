@@ -1,12 +1,16 @@
-// A scene whose every surface is a triangle mesh with a diffuse BSDF (one-
-// or two-sided, constant or textured reflectance), lit only by area emitters on such
-// meshes (Cornell boxes, architectural interiors), laid out for the diffuse
-// path batch's vector kernel (diffuse_batch.h): one 64-byte record per
-// triangle instead of the index buffer, three corners and four per-triangle
-// tables that a vertex otherwise reads.
+// A scene laid out for the vector path batch's kernel (diffuse_batch.h):
+// one 64-byte record per triangle of every mesh whose BSDF the kernel
+// shades (diffuse, one- or two-sided, constant or textured reflectance; rough
+// Beckmann conductors sampled by visible normals, with their parameters per
+// shape), instead of the index buffer, three corners and four per-triangle
+// tables that a vertex otherwise reads. Other shapes are flagged for the
+// scalar stages (kShapeScalar). Emitters: triangle records where every
+// emitter is a flat-shaded area light on a mesh; sphere records for sphere
+// area lights; FrameScene's sampling for the rest.
 //
-// FrameScene builds it where the scene allows and says why not elsewhere;
-// everything else keeps the general path tracer.
+// FrameScene builds it where the scene allows (an emitter, none of them an
+// environment, and at least one shape the kernel shades) and says why not
+// elsewhere; everything else keeps the general path tracer.
 #pragma once
 
 #include <memory>

@@ -1,4 +1,4 @@
-// The diffuse batch's vertex on eight paths at once (diffuse_batch_state.h),
+// The vector batch's vertex on eight paths at once (diffuse_batch_state.h),
 // compiled once per instruction set: diffuse_vertex_avx2.cpp (-mavx2) and
 // diffuse_vertex_avx512.cpp (AVX-512F/VL/DQ on the same 8-lane vectors:
 // masks, and the 64-bit multiply of PCG32 in one instruction), each defining
@@ -8,10 +8,15 @@
 //
 // Each step is the scalar code's in the same order, turned into lane masks:
 //   FrameScene::interaction (a triangle of a mesh), Frame,
-//   sample_emitter -> FrameScene::sample_emitter_direction (area emitters),
-//   connect_emitter -> diffuse_eval_pdf (two-sided: mirror_to_front),
-//   mis_power, shadow_ray, draw_bsdf_numbers, sample_bsdf_drawn ->
-//   diffuse_sample, square_to_cosine_hemisphere, spawn_ray,
+//   sample_emitter -> FrameScene::sample_emitter_direction (triangle area
+//   emitters; sphere area emitters from outside: sphere_point_in_cone,
+//   sincos_turns, sphere_cone_pdf; others through view.sample_emitter),
+//   connect_emitter -> diffuse_eval_pdf or rough_conductor_eval_pdf
+//   (two-sided: mirror_to_front), mis_power, shadow_ray,
+//   draw_bsdf_numbers, sample_bsdf_drawn -> diffuse_sample,
+//   square_to_cosine_hemisphere or rough_conductor_sample (Beckmann visible
+//   normals: BeckmannSlopeInversion, erfinv, with core/math/elementary.h's
+//   functions), bsdf.cpp's accept_sample, spawn_ray,
 //   russian_roulette_survival.
 // No multiply-add is fused (-ffp-contract=off for the whole build), so the
 // vector and scalar forms round alike; DiffuseBatchTest checks every kernel

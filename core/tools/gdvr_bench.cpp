@@ -253,9 +253,9 @@ int main(int argc, char** argv) {
   std::printf("resolution       %dx%d, %d spp, %d threads, %d runs (medians)\n", s.width, s.height, spp, thread_count, runs);
   std::printf("rays per render  %llu (recorded %zu)\n", (unsigned long long)pt_rays, cast_order.size());
   const std::string scalar_why = why_no_diffuse_batch(frame_scene, s.path, s.paths_in_flight);
-  const std::string kernel = scalar_why.empty() ? std::string("diffuse batch, ") + diffuse_kernels().front().isa +
+  const std::string kernel = scalar_why.empty() ? std::string("vector batch, ") + diffuse_kernels().front().isa +
                                                       " kernel"
-                                                : "scalar batch: the diffuse batch's kernel is left out, " + scalar_why;
+                                                : "scalar batch: the vector batch's kernel is left out, " + scalar_why;
   std::printf("path tracer      %.2f Mrays/s, %d paths in flight per thread (%s)\n", median(pt_rate) * 1e-6,
               s.paths_in_flight, kernel.c_str());
   std::printf("  one at a time  %.2f Mrays/s (batched / one at a time: %.3f, median of per-run ratios)\n",

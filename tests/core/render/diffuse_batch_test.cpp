@@ -1,5 +1,6 @@
-// The diffuse path batch (core/render/diffuse_batch.h) against the scalar
-// batch: on scenes that FrameScene lays out as diffuse records, every path's
+// The vector path batch (core/render/diffuse_batch.h) against the scalar
+// batch: on scenes that FrameScene lays out as records (diffuse and rough
+// conductor meshes; spheres and other BSDFs by the scalar stages), every path's
 // radiance must be the same bit for bit, through the same rays cast in the
 // same streams, whatever max_depth, Russian roulette depth and emitter
 // visibility; and scenes that do not fit must say why.
