@@ -254,8 +254,10 @@ TEST(DiffuseBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
 
 // The room with glossy panels: rough Beckmann conductors (two-sided and
 // one-sided, isotropic and anisotropic, from nearly smooth to rough, one
-// with a roughness under the 1e-4 floor), lit by a sphere light, a point
-// light, a spot light and a directional light (blocked by the walls: its
+// with a roughness under the 1e-4 floor), lit by a sphere light (close
+// enough to the ceiling that its cone is sampled in double there), a
+// flipped one (dark from outside), a point light, a spot light and a
+// directional light (blocked by the walls: its
 // shadow rays are unbounded); a plastic cube and a diffuse sphere are shaded
 // by the scalar stages.
 std::unique_ptr<FrameScene> load_glossy_room(Scene* desc) {
@@ -299,6 +301,12 @@ std::unique_ptr<FrameScene> load_glossy_room(Scene* desc) {
     <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
     <emitter type="area"><rgb name="radiance" value="40, 30, 20"/></emitter>
   </shape>
+  <shape type="sphere">
+    <point name="center" x="-0.6" y="0.75" z="0.6"/><float name="radius" value="0.15"/>
+    <boolean name="flip_normals" value="true"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="20, 20, 30"/></emitter>
+  </shape>
   <emitter type="point"><point name="position" x="-0.5" y="0.6" z="0.0"/><rgb name="intensity" value="1, 2, 3"/></emitter>
   <emitter type="spot">
     <transform name="to_world"><lookat origin="0.6, 0.6, -0.5" target="0, -1, 0.5" up="0, 1, 0"/></transform>
@@ -323,7 +331,9 @@ TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
   const DiffuseSceneView& view = room->diffuse_scene()->view();
   EXPECT_EQ(view.emitter_triangles, nullptr);
   for (size_t i : {1, 2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapeConductor, 0u) << "shape " << i;
-  for (size_t i : {5, 6, 7}) EXPECT_NE(view.shape_flags[i] & kShapeScalar, 0u) << "shape " << i;
+  for (size_t i : {5, 6, 7, 8}) EXPECT_NE(view.shape_flags[i] & kShapeScalar, 0u) << "shape " << i;
+  ASSERT_NE(view.emitter_spheres, nullptr);
+  EXPECT_EQ(view.emitter_spheres[1].flip, -1.0f);
   EXPECT_EQ(view.shape_conductor[4].alpha_u, 0.6f);
   EXPECT_EQ(view.shape_conductor[3].alpha_u, 1e-4f);  // MicrofacetDistribution's floor
   if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
