@@ -260,7 +260,9 @@ TEST(DiffuseBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
 // directional light (blocked by the walls: its
 // shadow rays are unbounded); a plastic cube and a diffuse sphere are shaded
 // by the scalar stages.
-std::unique_ptr<FrameScene> load_glossy_room(Scene* desc) {
+// Shapes of the glossy room.
+constexpr size_t kGlossyPanel = 1, kSphereLight = 7;
+std::unique_ptr<FrameScene> load_glossy_room(Scene* desc, bool animated = false) {
   const std::string conductor = R"(<string name="distribution" value="beckmann"/>
       <rgb name="specular_reflectance" value="0.9, 0.8, 0.6"/>
       <rgb name="eta" value="0.200438, 0.924033, 1.10221"/><rgb name="k" value="3.91295, 2.45285, 2.14219"/>)";
@@ -318,9 +320,32 @@ std::unique_ptr<FrameScene> load_glossy_room(Scene* desc) {
   EXPECT_TRUE(loaded.ok()) << loaded.status().to_string();
   if (!loaded.ok()) return nullptr;
   *desc = std::move(loaded.value());
-  auto fs = FrameScene::create(*desc, {});
+  std::vector<bool> animate(desc->shapes.size(), false);
+  animate[kGlossyPanel] = animate[kSphereLight] = animated;
+  auto fs = FrameScene::create(*desc, animate);
   EXPECT_TRUE(fs.ok()) << fs.status().to_string();
   return fs.ok() ? std::move(fs.value()) : nullptr;
+}
+
+// An animated conductor panel and sphere light: the records follow them
+// through FrameScene::update (the sphere's centre moves in its record).
+TEST(DiffuseBatchTest, AnimatedGlossyRoomMatchesTheScalarBatchAfterUpdates) {
+  Scene desc;
+  auto room = load_glossy_room(&desc, /*animated=*/true);
+  ASSERT_TRUE(room);
+  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  expect_same_as_scalar_batch(*room, kVariants[2], kW, kH);
+  const float x0 = room->diffuse_scene()->view().emitter_spheres[0].center[0];
+  Scene moved = desc;
+  moved.shapes[kSphereLight].to_world = Transform::translate({-0.3f, -0.1f, 0.1f}) * desc.shapes[kSphereLight].to_world;
+  moved.shapes[kGlossyPanel].to_world =
+      Transform::translate({0.1f, 0.1f, -0.1f}) * Transform::rotate({0, 1, 0}, 25.0f) * desc.shapes[kGlossyPanel].to_world;
+  ASSERT_TRUE(room->update(moved).ok());
+  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  EXPECT_FLOAT_EQ(room->diffuse_scene()->view().emitter_spheres[0].center[0], x0 - 0.3f);
+  expect_same_as_scalar_batch(*room, kVariants[2], kW, kH);
+  expect_same_as_scalar_batch(*room, kVariants[0], kW, kH);
 }
 
 TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
