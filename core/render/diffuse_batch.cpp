@@ -17,25 +17,27 @@ Ray shadow_ray_of(const DiffuseBatchState& s, int i) {
   return {lane3(s.shadow_o, i), lane3(s.shadow_d, i), 0.0f, s.shadow_tmax[i]};
 }
 
-// The state start_path() left in paths[0..n), field by field.
+// A path's state between vertices into lane i, field by field (store_path's inverse).
+void load_path(const PathState& st, int i, DiffuseBatchState* s) {
+  s->rng_state[i] = st.sampler.generator().state();
+  s->rng_inc[i] = st.sampler.generator().increment();
+  set_lane(s->o, i, st.ray.o);
+  set_lane(s->d, i, st.ray.d);
+  s->tmin[i] = st.ray.tmin;
+  s->tmax[i] = st.ray.tmax;
+  set_lane(s->throughput, i, st.throughput);
+  set_lane(s->result, i, st.result);
+  set_lane(s->direct, i, st.direct);
+  set_lane(s->prev_p, i, st.prev_p);
+  s->prev_pdf[i] = st.prev_bsdf_pdf;
+  s->prev_delta[i] = st.prev_bsdf_delta ? -1 : 0;
+  s->depth[i] = st.depth;
+}
+
+// The state start_path() left in paths[0..n).
 void load_paths(const PathState* paths, int n, DiffuseBatchState* s) {
   for (int i = 0; i < kDiffuseBatch; ++i) s->shade[i] = s->continues[i] = s->shadow_pending[i] = 0;
-  for (int i = 0; i < n; ++i) {
-    const PathState& st = paths[i];
-    s->rng_state[i] = st.sampler.generator().state();
-    s->rng_inc[i] = st.sampler.generator().increment();
-    set_lane(s->o, i, st.ray.o);
-    set_lane(s->d, i, st.ray.d);
-    s->tmin[i] = st.ray.tmin;
-    s->tmax[i] = st.ray.tmax;
-    set_lane(s->throughput, i, st.throughput);
-    set_lane(s->result, i, st.result);
-    set_lane(s->direct, i, st.direct);
-    set_lane(s->prev_p, i, st.prev_p);
-    s->prev_pdf[i] = st.prev_bsdf_pdf;
-    s->prev_delta[i] = st.prev_bsdf_delta ? -1 : 0;
-    s->depth[i] = st.depth;
-  }
+  for (int i = 0; i < n; ++i) load_path(paths[i], i, s);
 }
 
 // Lane i's whole state back into its PathState, for the scalar stages.
@@ -97,34 +99,20 @@ void shade_vertex_on_lane(const FrameScene& scene, const PathTracerSettings& set
   st->blocked = false;
   scene.interaction(st->ray, hit, &st->si);
   add_emission(scene, settings, st);
-  s->shadow_pending[i] = 0;
-  s->continues[i] = 0;
   if (st->continues) {
     sample_emitter(scene, st);
     connect_emitter(st);
     sample_bsdf(settings, st);
   }
-  s->rng_state[i] = st->sampler.generator().state();
-  set_lane(s->result, i, st->result);
-  set_lane(s->direct, i, st->direct);
+  // The whole state back (a path that ended keeps only its sums' meaning).
+  load_path(*st, i, s);
+  s->continues[i] = st->continues ? -1 : 0;
+  s->shadow_pending[i] = st->shadow_pending ? -1 : 0;
   if (st->shadow_pending) {
-    s->shadow_pending[i] = -1;
     set_lane(s->shadow_o, i, st->shadow.o);
     set_lane(s->shadow_d, i, st->shadow.d);
     s->shadow_tmax[i] = st->shadow.tmax;
     set_lane(s->shadow_contribution, i, st->shadow_contribution);
-  }
-  if (st->continues) {
-    s->continues[i] = -1;
-    set_lane(s->o, i, st->ray.o);
-    set_lane(s->d, i, st->ray.d);
-    s->tmin[i] = st->ray.tmin;
-    s->tmax[i] = st->ray.tmax;
-    set_lane(s->throughput, i, st->throughput);
-    set_lane(s->prev_p, i, st->prev_p);
-    s->prev_pdf[i] = st->prev_bsdf_pdf;
-    s->prev_delta[i] = st->prev_bsdf_delta ? -1 : 0;
-    s->depth[i] = st->depth;
   }
 }
 

@@ -28,7 +28,7 @@ std::string shape_name(const Scene& scene, size_t i) {
 // What the kernel can do with hits on shape i: kShapeConductor for a rough
 // Beckmann conductor sampled by visible normals, 0 for a diffuse BSDF (both
 // on triangle meshes), kShapeScalar for anything else.
-uint32_t shading_kind(const FrameScene& fs, const Scene& scene, size_t i) {
+uint32_t shading_kind(const Scene& scene, size_t i) {
   const Shape& shape = scene.shapes[i];
   if (shape.type != ShapeType::kMesh) return kShapeScalar;
   const Bsdf& bsdf = scene.bsdfs[size_t(shape.bsdf)];
@@ -38,7 +38,6 @@ uint32_t shading_kind(const FrameScene& fs, const Scene& scene, size_t i) {
       bsdf.sample_visible && bsdf.specular_reflectance.is_constant() && is_finite(bsdf.specular_reflectance.value) &&
       is_finite(bsdf.eta) && is_finite(bsdf.k))
     return kShapeConductor;
-  (void)fs;
   return kShapeScalar;
 }
 
@@ -71,7 +70,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
       return fail("emitter " + std::to_string(e) + " is an environment");
   size_t triangle_count = 0, vector_shapes = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
-    if (shading_kind(fs, scene, i) == kShapeScalar) continue;
+    if (shading_kind(scene, i) == kShapeScalar) continue;
     ++vector_shapes;
     triangle_count += fs.shapes_[i].mesh->triangle_count();
   }
@@ -89,7 +88,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
   ds->shape_conductor_.assign(scene.shapes.size(), ConductorRecord{});
   uint32_t first = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
-    const uint32_t kind = shading_kind(fs, scene, i);
+    const uint32_t kind = shading_kind(scene, i);
     if (kind == kShapeScalar) {
       ds->shape_flags_[i] = kShapeScalar;
       continue;

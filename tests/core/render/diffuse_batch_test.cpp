@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,21 @@ bool same_bits(const Rgb& a, const Rgb& b) { return std::memcmp(&a, &b, sizeof(R
 bool same_ray(const RecordedRay& a, const RecordedRay& b) {
   return std::memcmp(&a.ray, &b.ray, sizeof(Ray)) == 0 && a.shadow == b.shadow && a.emitters_only == b.emitters_only &&
          a.coherent == b.coherent && a.stream == b.stream;
+}
+
+// The scene in `xml` (files relative to `dir`) as *desc and its FrameScene,
+// the shapes in `animated` instanced.
+std::unique_ptr<FrameScene> load_xml_scene(const std::string& xml, const std::string& dir, Scene* desc,
+                                           std::initializer_list<size_t> animated) {
+  auto loaded = load_mitsuba_scene_from_string(xml, dir, LoadOptions{});
+  EXPECT_TRUE(loaded.ok()) << loaded.status().to_string();
+  if (!loaded.ok()) return nullptr;
+  *desc = std::move(loaded.value());
+  std::vector<bool> animate(desc->shapes.size(), false);
+  for (size_t i : animated) animate[i] = true;
+  auto fs = FrameScene::create(*desc, animate);
+  EXPECT_TRUE(fs.ok()) << fs.status().to_string();
+  return fs.ok() ? std::move(fs.value()) : nullptr;
 }
 
 // A room (an inward-facing cube, checkered through its uvs) lit by two area
@@ -81,15 +97,8 @@ std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
     <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.9, 0, 0"/></bsdf></bsdf>
   </shape>
 </scene>)";
-  auto loaded = load_mitsuba_scene_from_string(xml, dir.string(), LoadOptions{});
-  EXPECT_TRUE(loaded.ok()) << loaded.status().to_string();
-  if (!loaded.ok()) return nullptr;
-  *desc = std::move(loaded.value());
-  std::vector<bool> animate(desc->shapes.size(), false);
-  animate[kFan] = animate[kRedPanel] = animated;
-  auto fs = FrameScene::create(*desc, animate);
-  EXPECT_TRUE(fs.ok()) << fs.status().to_string();
-  return fs.ok() ? std::move(fs.value()) : nullptr;
+  if (!animated) return load_xml_scene(xml, dir.string(), desc, {});
+  return load_xml_scene(xml, dir.string(), desc, {kFan, kRedPanel});
 }
 
 TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
@@ -316,15 +325,9 @@ std::unique_ptr<FrameScene> load_glossy_room(Scene* desc, bool animated = false)
   </emitter>
   <emitter type="directional"><vector name="direction" x="0.3" y="-1" z="0.2"/><rgb name="irradiance" value="2, 2, 2"/></emitter>
 </scene>)";
-  auto loaded = load_mitsuba_scene_from_string(xml, std::filesystem::temp_directory_path().string(), LoadOptions{});
-  EXPECT_TRUE(loaded.ok()) << loaded.status().to_string();
-  if (!loaded.ok()) return nullptr;
-  *desc = std::move(loaded.value());
-  std::vector<bool> animate(desc->shapes.size(), false);
-  animate[kGlossyPanel] = animate[kSphereLight] = animated;
-  auto fs = FrameScene::create(*desc, animate);
-  EXPECT_TRUE(fs.ok()) << fs.status().to_string();
-  return fs.ok() ? std::move(fs.value()) : nullptr;
+  const std::string dir = std::filesystem::temp_directory_path().string();
+  if (!animated) return load_xml_scene(xml, dir, desc, {});
+  return load_xml_scene(xml, dir, desc, {kGlossyPanel, kSphereLight});
 }
 
 // An animated conductor panel and sphere light: the records follow them
