@@ -54,17 +54,16 @@ void store_path(const DiffuseBatchState& s, int i, PathState* st) {
   st->shadow_pending = false;
 }
 
-// log_stream() for lanes which[0..n).
-void log_lanes(const DiffuseBatchState& s, const int* which, int n, bool shadow, RayCoherence coherence,
-               PathCounters& counters) {
+// log_stream() for lanes which[0..n), whose rays are ray_of_lane(i).
+template <class RayOfLane>
+void log_lanes(const int* which, int n, bool shadow, GeometrySet set, RayCoherence coherence,
+               PathCounters& counters, RayOfLane ray_of_lane) {
   if (!counters.ray_log) {
     counters.rays += uint64_t(n);
     return;
   }
   const uint32_t stream = ++counters.streams_logged;
-  for (int k = 0; k < n; ++k)
-    log_ray(shadow ? shadow_ray_of(s, which[k]) : ray_of(s, which[k]), shadow, GeometrySet::kAll, stream, counters,
-            coherence);
+  for (int k = 0; k < n; ++k) log_ray(ray_of_lane(which[k]), shadow, set, stream, counters, coherence);
 }
 
 // add_emission() for lane i, whose ray hit an emitter: through a PathState,
@@ -114,6 +113,49 @@ void shade_vertex_on_lane(const FrameScene& scene, const PathTracerSettings& set
     s->shadow_tmax[i] = st->shadow.tmax;
     set_lane(s->shadow_contribution, i, st->shadow_contribution);
   }
+}
+
+// cast_last_stream() and add_emission() for lanes live[0..count), whose rays
+// are their paths' last under max_depth: the emitters-only query, the any-hit
+// query before the emitter for the lanes that found one, and the emission of
+// those that see it. In a scene of the vector batch a ray that finds no
+// emitter sees nothing (it has no environment).
+void cast_last_rays(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* s,
+                    const int* live, int count, RayCoherence coherence, RayStream& stream, PathCounters& counters,
+                    PathState* scratch) {
+  log_lanes(live, count, false, GeometrySet::kEmitters, coherence, counters, [s](int i) { return ray_of(*s, i); });
+  for (int k = 0; k < count; ++k) {
+    const int i = live[k];
+    stream.set(k, lane3(s->o, i), lane3(s->d, i), s->tmin[i], s->tmax[i]);
+  }
+  scene.accelerator().intersect_stream(stream, count, GeometrySet::kEmitters, coherence);
+  int found[kPathBatch];
+  RayHit hits[kPathBatch];
+  int m = 0;
+  for (int k = 0; k < count; ++k) {
+    if (!stream.found(k)) continue;
+    const int i = live[k];
+    hits[m] = stream.hit(k);
+    // take_last_hit: the any-hit query is the ray itself (tmin included),
+    // stopped short of the emitter at the interaction's distance.
+    scene.interaction(ray_of(*s, i), hits[m], &scratch->si);
+    s->shadow_tmax[i] = scratch->si.t * (1.0f - kShadowEpsilon);
+    found[m++] = i;
+  }
+  if (m == 0) return;
+  const auto before_emitter = [s](int i) {
+    Ray r = ray_of(*s, i);
+    r.tmax = s->shadow_tmax[i];
+    return r;
+  };
+  log_lanes(found, m, true, GeometrySet::kAll, RayCoherence::kIncoherent, counters, before_emitter);
+  for (int k = 0; k < m; ++k) {
+    const Ray r = before_emitter(found[k]);
+    stream.set(k, r.o, r.d, r.tmin, r.tmax);
+  }
+  scene.accelerator().occluded_stream(stream, m);
+  for (int k = 0; k < m; ++k)
+    if (!stream.occluded(k)) add_emission_on_lane(scene, settings, s, found[k], hits[k], scratch);
 }
 
 }  // namespace
@@ -167,7 +209,7 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
   for (int depth = 0; count > 0 && depth < last; ++depth) {
     // ---- Closest hits: one stream, as cast_inner_stream ----
     const RayCoherence coherence = depth == 0 ? RayCoherence::kCoherent : RayCoherence::kIncoherent;
-    log_lanes(s, live, count, false, coherence, counters);
+    log_lanes(live, count, false, GeometrySet::kAll, coherence, counters, [&](int i) { return ray_of(s, i); });
     for (int k = 0; k < count; ++k) {
       const int i = live[k];
       stream.set(k, lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]);
@@ -177,7 +219,16 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
       const int i = live[k];
       if (!stream.found(k)) continue;  // no environment: nothing is seen, the path ends
       const RayHit hit = stream.hit(k);
-      if (view.shape_flags[hit.id] & kShapeScalar) {
+      const uint32_t flags = view.shape_flags[hit.id];
+      if (flags & kShapeReflectsNothing) {
+        // add_emission, then the path ends (kShapeReflectsNothing).
+        if (scene.emitter_of_shape(hit.id) >= 0 && !(depth == 0 && settings.hide_emitters))
+          add_emission_on_lane(scene, settings, &s, i, hit, &scratch);
+        s.continues[i] = s.shadow_pending[i] = 0;
+        scalar_shaded[i] = -1;
+        continue;
+      }
+      if (flags & kShapeScalar) {
         shade_vertex_on_lane(scene, settings, &s, i, hit, &scratch);
         scalar_shaded[i] = -1;
         continue;
@@ -209,7 +260,8 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
       next += (shaded & s.continues[i]) != 0;
     }
     if (pending > 0) {
-      log_lanes(s, shadowed, pending, true, RayCoherence::kIncoherent, counters);
+      log_lanes(shadowed, pending, true, GeometrySet::kAll, RayCoherence::kIncoherent, counters,
+                [&](int i) { return shadow_ray_of(s, i); });
       for (int k = 0; k < pending; ++k) {
         const int i = shadowed[k];
         stream.set(k, lane3(s.shadow_o, i), lane3(s.shadow_d, i), 0.0f, s.shadow_tmax[i]);
@@ -224,14 +276,16 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
     count = next;
   }
 
-  // ---- Hand over: every path's sums; the live paths' last ray to the scalar stages ----
+  // ---- The live paths' last ray, then every path's sums ----
+  if (count > 0) {
+    const RayCoherence coherence = last == 0 ? RayCoherence::kCoherent : RayCoherence::kIncoherent;
+    cast_last_rays(scene, settings, &s, live, count, coherence, stream, counters, &scratch);
+  }
   for (int i = 0; i < n; ++i) {
     paths[i].result = lane_rgb(s.result, i);
     paths[i].direct = lane_rgb(s.direct, i);
+    out[i] = finish_path(paths[i], counters);
   }
-  for (int k = 0; k < count; ++k) store_path(s, live[k], &paths[live[k]]);
-  if (count > 0) continue_path_batch(scene, settings, paths, live, count, stream, counters);
-  for (int i = 0; i < n; ++i) out[i] = finish_path(paths[i], counters);
 }
 
 }  // namespace gdvr

@@ -64,6 +64,11 @@ constexpr uint32_t kShapeConductor = 8;
 // The kernel does not shade its hits (a sphere, another BSDF): the driver
 // runs the scalar stages for them (diffuse_batch.cpp), and it has no records.
 constexpr uint32_t kShapeScalar = 16;
+// Its BSDF reflects nothing (a diffuse one of constant reflectance 0, as
+// veach-mis's sphere lights have): a path that hits it takes the emission
+// and ends there, as the scalar stages would end it (they sample an emitter
+// and a direction for nothing), without shading the vertex.
+constexpr uint32_t kShapeReflectsNothing = 32;
 
 // A rough conductor's parameters (Mitsuba's roughconductor, Beckmann,
 // visible normals), by shape id.

@@ -41,6 +41,15 @@ uint32_t shading_kind(const Scene& scene, size_t i) {
   return kShapeScalar;
 }
 
+// kShapeReflectsNothing where shape i's BSDF is diffuse with a constant
+// reflectance of exactly zero (twosided or not), else 0.
+uint32_t reflects_nothing(const Scene& scene, size_t i) {
+  const Bsdf& bsdf = scene.bsdfs[size_t(scene.shapes[i].bsdf)];
+  const bool black =
+      bsdf.type == BsdfType::kDiffuse && bsdf.reflectance.is_constant() && bsdf.reflectance.value.is_black();
+  return black ? kShapeReflectsNothing : 0u;
+}
+
 // FrameScene::sample_emitter_direction for the kernel (SampleEmitterFn). Only
 // the reference point of the interaction is read.
 void sample_emitter_lane(const void* scene, const float p[3], float u_select, float ux, float uy,
@@ -90,7 +99,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
     const uint32_t kind = shading_kind(scene, i);
     if (kind == kShapeScalar) {
-      ds->shape_flags_[i] = kShapeScalar;
+      ds->shape_flags_[i] = kShapeScalar | reflects_nothing(scene, i);
       continue;
     }
     ds->shape_first_[i] = first;
@@ -98,7 +107,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
     const Bsdf& bsdf = scene.bsdfs[size_t(scene.shapes[i].bsdf)];
     const bool textured = kind == 0 && !bsdf.reflectance.is_constant();
     ds->shape_flags_[i] = kind | (bsdf.two_sided ? kShapeTwoSided : 0u) | (textured ? kShapeTextured : 0u) |
-                          (fs.shapes_[i].mesh->uvs.empty() ? 0u : kShapeHasUvs);
+                          (fs.shapes_[i].mesh->uvs.empty() ? 0u : kShapeHasUvs) | reflects_nothing(scene, i);
     ds->shape_texture_[i] = textured ? &bsdf.reflectance : nullptr;
     if (kind == kShapeConductor) {
       // As MicrofacetDistribution's constructor clamps them.

@@ -76,11 +76,6 @@ void trace_at_most_one_batch(const FrameScene& scene, const PathTracerSettings& 
 
 }  // namespace
 
-void continue_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int* live,
-                         int count, RayStream& stream, PathCounters& counters) {
-  run_batch(scene, settings, paths, live, count, stream, counters);
-}
-
 void trace_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                       PathCounters& counters, PathSample* out) {
   RayStream stream;

@@ -25,12 +25,6 @@ namespace gdvr {
 void trace_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                       PathCounters& counters, PathSample* out);
 
-// Advances paths[live[0..count)] (count <= kPathBatch, all at one depth,
-// their next rays set) stage by stage to their ends; `live` is overwritten.
-// For a batch that another driver (diffuse_batch.h) hands over midway.
-void continue_path_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int* live,
-                         int count, RayStream& stream, PathCounters& counters);
-
 // Samples [first_sample, first_sample + count) of every pixel of `tile`,
 // traced in batches of `paths_in_flight` (1..kPathBatch; 1 is one path at a
 // time, for benchmarks); `add` receives them in the order of trace_path's loop
