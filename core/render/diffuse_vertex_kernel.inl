@@ -394,16 +394,19 @@ struct VConductor {
     const vf result = vexp(-(mx * mx + my * my) / cos_theta_2) / (kPi * alpha_uv * (cos_theta_2 * cos_theta_2));
     return vsel(~(cos_theta_2 <= 0.0f) & (result * cos_theta > 1e-20f), result, splat(0.0f));
   }
-  // MicrofacetDistribution::smith_g1 (Beckmann).
-  vf smith_g1(V3 v, V3 m) const {
+  // MicrofacetDistribution::smith_g1 (Beckmann) in two parts: what depends
+  // on v alone (g1_of), and the side test against m. A vertex's wo enters
+  // both its emitter connection and its sample, so its part is made once.
+  vf g1_of(V3 v) const {
     const vf ux = alpha_u * v.x, vy = alpha_v * v.y;
     const vf xy_alpha_2 = ux * ux + vy * vy;
     const vf a = vabs(v.z) / vsqrt(xy_alpha_2);
     const vf lambda = 0.5f * (vexp(-a * a) * kInvSqrtPi / a - verfc(a));
     const vf g = 1.0f / (1.0f + lambda);
-    return vsel(vdot(v, m) * v.z <= 0.0f, splat(0.0f),
-                vsel((xy_alpha_2 == 0.0f) | (a >= 9.0f), splat(1.0f), g));
+    return vsel((xy_alpha_2 == 0.0f) | (a >= 9.0f), splat(1.0f), g);
   }
+  static vf smith_g1(V3 v, V3 m, vf g1_v) { return vsel(vdot(v, m) * v.z <= 0.0f, splat(0.0f), g1_v); }
+  vf smith_g1(V3 v, V3 m) const { return smith_g1(v, m, g1_of(v)); }
   // fresnel_conductor per channel, times specular_reflectance.
   V3 fresnel(vf cos_theta_i) const {
     const vf c2 = cos_theta_i * cos_theta_i, s2 = 1.0f - c2, s4 = s2 * s2;
@@ -421,10 +424,11 @@ struct VConductor {
   }
   // rough_conductor_eval_pdf on the front side: the value (zero where the
   // scalar code returns {}) and the visible-normal pdf.
-  void eval_pdf(V3 wo, V3 wi, V3* value, vf* pdf) const {
+  // g1_wo: g1_of(wo).
+  void eval_pdf(V3 wo, vf g1_wo, V3 wi, V3* value, vf* pdf) const {
     const V3 h = vnormalize(wo + wi);
     const vf dh = d(h);
-    const vf g1_o = smith_g1(wo, h);
+    const vf g1_o = smith_g1(wo, h, g1_wo);
     const vf g = g1_o * smith_g1(wi, h);
     const V3 f = fresnel(vdot(wo, h));
     const vi valid = ~(wo.z <= 0.0f) & ~(wi.z <= 0.0f) & ~(vdot(wo, h) <= 0.0f) & ~(vdot(wi, h) <= 0.0f) &
@@ -435,7 +439,7 @@ struct VConductor {
   }
   // rough_conductor_sample through Beckmann visible normals, with
   // bsdf_sample's acceptance: where `ok`, the direction, weight and pdf.
-  vi sample(V3 wo, vf ux, vf uy, V3* wi_out, V3* weight, vf* pdf_out) const {
+  vi sample(V3 wo, vf g1_wo, vf ux, vf uy, V3* wi_out, V3* weight, vf* pdf_out) const {
     const V3 wi_p = vnormalize(V3{alpha_u * wo.x, alpha_v * wo.y, wo.z});  // stretch
     vf sx, sy;
     beckmann_slope(wi_p.z, ux, uy, &sx, &sy);
@@ -452,7 +456,7 @@ struct VConductor {
     m = vsel3(m_finite, m, V3{splat(0.0f), splat(0.0f), splat(1.0f)});
     // MicrofacetDistribution::pdf(wo, m) with visible normals.
     const vf dm = d(m);
-    const vf pdf_visible = dm * smith_g1(wo, m) * vabs(vdot(wo, m)) / wo.z;
+    const vf pdf_visible = dm * smith_g1(wo, m, g1_wo) * vabs(vdot(wo, m)) / wo.z;
     const vf pdf_m = vsel(m_finite & ~(dm == 0.0f) & ~(wo.z == 0.0f), pdf_visible, splat(0.0f));
     // reflect_on_microfacet
     const V3 wi = m * (2.0f * vdot(wo, m)) - wo;
@@ -547,6 +551,7 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   const bool any_conductor = !_mm256_testz_si256((__m256i)conductor, (__m256i)conductor);
   VConductor cond{};
   V3 wo_local{};
+  vf g1_wo{};
   if (any_conductor) {
     uint32_t shape_lanes[kLanes];
     for (int i = 0; i < kLanes; ++i) shape_lanes[i] = conductor[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
@@ -557,6 +562,7 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
     cond.k = V3{c.f[5], c.f[6], c.f[7]};
     cond.specular = V3{c.f[8], c.f[9], c.f[10]};
     wo_local = V3{vdot(wo_world, fs), vdot(wo_world, ft), wo_front_z};
+    g1_wo = cond.g1_of(wo_local);
   }
 
   // ---- sample_emitter ----
@@ -678,7 +684,7 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   if (any_conductor) {
     V3 fc;
     vf pc;
-    cond.eval_pdf(wo_local, V3{vdot(es_d, fs), vdot(es_d, ft), wl_z}, &fc, &pc);
+    cond.eval_pdf(wo_local, g1_wo, V3{vdot(es_d, fs), vdot(es_d, ft), wl_z}, &fc, &pc);
     f = vsel3(conductor, fc, f);
     bsdf_pdf = vsel(conductor, pc, bsdf_pdf);
   }
@@ -701,7 +707,7 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   if (any_conductor) {
     V3 wi_c, weight_c;
     vf pdf_c;
-    const vi ok = cond.sample(wo_local, vx, vy, &wi_c, &weight_c, &pdf_c);
+    const vi ok = cond.sample(wo_local, g1_wo, vx, vy, &wi_c, &weight_c, &pdf_c);
     alive |= conductor & ok & ~is_black(weight_c);
     wi = vsel3(conductor, wi_c, wi);
     bsdf_weight = vsel3(conductor, weight_c, bsdf_weight);
