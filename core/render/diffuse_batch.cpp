@@ -34,11 +34,6 @@ void load_path(const PathState& st, int i, DiffuseBatchState* s) {
   s->depth[i] = st.depth;
 }
 
-// The state start_path() left in paths[0..n).
-void load_paths(const PathState* paths, int n, DiffuseBatchState* s) {
-  for (int i = 0; i < kDiffuseBatch; ++i) s->shade[i] = s->continues[i] = s->shadow_pending[i] = 0;
-  for (int i = 0; i < n; ++i) load_path(paths[i], i, s);
-}
 
 // Lane i's whole state back into its PathState, for the scalar stages.
 void store_path(const DiffuseBatchState& s, int i, PathState* st) {
@@ -186,6 +181,22 @@ std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettin
   return "";
 }
 
+void start_lane(DiffuseBatchState* s, int i, const Ray& camera_ray, const Sampler& sampler) {
+  s->rng_state[i] = sampler.generator().state();
+  s->rng_inc[i] = sampler.generator().increment();
+  set_lane(s->o, i, camera_ray.o);
+  set_lane(s->d, i, camera_ray.d);
+  s->tmin[i] = camera_ray.tmin;
+  s->tmax[i] = camera_ray.tmax;
+  set_lane(s->throughput, i, Rgb(1.0f));
+  set_lane(s->result, i, Rgb(0.0f));
+  set_lane(s->direct, i, Rgb(0.0f));
+  set_lane(s->prev_p, i, camera_ray.o);
+  s->prev_pdf[i] = 1.0f;
+  s->prev_delta[i] = -1;
+  s->depth[i] = 0;
+}
+
 void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
                          RayStream& stream, PathCounters& counters, PathSample* out, const DiffuseKernel* kernel) {
   if (!scene.diffuse_scene() || (!kernel && diffuse_kernels().empty())) {
@@ -193,11 +204,19 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
     trace_path_batch(scene, settings, paths, n, counters, out);
     return;
   }
+  DiffuseBatchState s;
+  for (int i = 0; i < n; ++i) load_path(paths[i], i, &s);
+  trace_started_diffuse_batch(scene, settings, &s, n, stream, counters, out, kernel);
+}
+
+void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* state,
+                                 int n, RayStream& stream, PathCounters& counters, PathSample* out,
+                                 const DiffuseKernel* kernel) {
   if (!kernel) kernel = &diffuse_kernels().front();
   DiffuseSceneView view = scene.diffuse_scene()->view();
   view.rr_depth = settings.rr_depth;
-  DiffuseBatchState s;
-  load_paths(paths, n, &s);
+  DiffuseBatchState& s = *state;
+  for (int i = 0; i < kDiffuseBatch; ++i) s.shade[i] = s.continues[i] = s.shadow_pending[i] = 0;
   int live[kPathBatch], shadowed[kPathBatch];
   int32_t scalar_shaded[kPathBatch] = {};  // -1 where shade_vertex_on_lane shaded the vertex
   int count = n;
@@ -281,11 +300,7 @@ void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& sett
     const RayCoherence coherence = last == 0 ? RayCoherence::kCoherent : RayCoherence::kIncoherent;
     cast_last_rays(scene, settings, &s, live, count, coherence, stream, counters, &scratch);
   }
-  for (int i = 0; i < n; ++i) {
-    paths[i].result = lane_rgb(s.result, i);
-    paths[i].direct = lane_rgb(s.direct, i);
-    out[i] = finish_path(paths[i], counters);
-  }
+  for (int i = 0; i < n; ++i) out[i] = finish_path(lane_rgb(s.result, i), lane_rgb(s.direct, i), counters);
 }
 
 }  // namespace gdvr

@@ -1,6 +1,7 @@
 #include "core/render/path_batch.h"
 
 #include <algorithm>
+#include <memory>
 
 #include "core/render/diffuse_batch.h"
 
@@ -88,17 +89,18 @@ void trace_tile_samples(const FrameScene& scene, const PathTracerSettings& setti
                         uint64_t seed, uint32_t frame, const Tile& tile, int first_sample, int count,
                         int paths_in_flight, PathCounters& counters, const std::function<void(int x, int y, const PathSample&)>& add) {
   const int batch = std::clamp(paths_in_flight, 1, kPathBatch);
-  PathState paths[kPathBatch];
+  // A full batch of a scene with records goes to the vector batch, its paths
+  // started in place; one path at a time (a benchmark's baseline) stays scalar.
+  const bool vector = settings.vector_kernels && batch == kPathBatch && diffuse_batch_available(scene);
+  std::unique_ptr<DiffuseBatchState> lanes(vector ? new DiffuseBatchState : nullptr);
+  std::unique_ptr<PathState[]> paths(vector ? nullptr : new PathState[kPathBatch]);
   PathSample out[kPathBatch];
   RayStream stream;
   int px[kPathBatch], py[kPathBatch];
   int n = 0;
-  // A full batch of a diffuse scene goes to the vector kernel; one path at a
-  // time (a benchmark's baseline) stays scalar.
-  const bool diffuse = settings.vector_kernels && batch == kPathBatch && diffuse_batch_available(scene);
   auto flush = [&] {
-    if (diffuse) trace_diffuse_batch(scene, settings, paths, n, stream, counters, out);
-    else trace_at_most_one_batch(scene, settings, paths, n, stream, counters, out);
+    if (vector) trace_started_diffuse_batch(scene, settings, lanes.get(), n, stream, counters, out);
+    else trace_at_most_one_batch(scene, settings, paths.get(), n, stream, counters, out);
     for (int i = 0; i < n; ++i) add(px[i], py[i], out[i]);
     n = 0;
   };
@@ -108,7 +110,9 @@ void trace_tile_samples(const FrameScene& scene, const PathTracerSettings& setti
       for (int s = first_sample; s < first_sample + count; ++s) {
         Sampler sampler(pixel, uint32_t(s));
         Vec2f jitter = sampler.next_2d();  // box filter: uniform within the pixel
-        start_path(&paths[n], camera.generate_ray({float(x) + jitter.x, float(y) + jitter.y}), sampler);
+        const Ray ray = camera.generate_ray({float(x) + jitter.x, float(y) + jitter.y});
+        if (vector) start_lane(lanes.get(), n, ray, sampler);
+        else start_path(&paths[n], ray, sampler);
         px[n] = x;
         py[n] = y;
         if (++n == batch) flush();

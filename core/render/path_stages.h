@@ -199,15 +199,20 @@ inline void resolve_shadow(bool occluded, PathState* st) {
   st->shadow_pending = false;
 }
 
-inline PathSample finish_path(const PathState& st, PathCounters& counters) {
-  if (!is_finite(st.result)) {
+// A finished path's sample from its sums; a sum that is not finite is
+// counted and the sample dropped (zero).
+inline PathSample finish_path(const Rgb& result, const Rgb& direct, PathCounters& counters) {
+  if (!is_finite(result)) {
     ++counters.invalid_samples;
     return PathSample{};
   }
   PathSample out;
-  out.radiance = st.result;
-  out.direct = st.direct;
+  out.radiance = result;
+  out.direct = direct;
   return out;
+}
+inline PathSample finish_path(const PathState& st, PathCounters& counters) {
+  return finish_path(st.result, st.direct, counters);
 }
 
 // ---- The ray casts, counted (and logged for gdvr-bench) as they are made ----
