@@ -368,6 +368,45 @@ TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
+// Meshes and a sphere that reflect nothing (kShapeReflectsNothing): a black
+// rectangle light, a black cube and a black sphere end the paths that reach
+// them, after the light's emission.
+TEST(DiffuseBatchTest, ShapesThatReflectNothingEndPathsAsTheScalarBatchDoes) {
+  Scene desc;
+  auto room = load_xml_scene(R"(<scene version="3.0.0">
+  <sensor type="perspective">
+    <float name="fov" value="80"/>
+    <transform name="to_world"><lookat origin="0, 0, -0.9" target="0, -0.2, 1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
+  </sensor>
+  <shape type="cube"><boolean name="flip_normals" value="true"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.6, 0.4"/></bsdf></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.4"/><rotate y="1" angle="20"/><translate x="-0.4" y="-0.2" z="0.6"/></transform>
+    <bsdf type="twosided"><bsdf type="roughconductor"><string name="distribution" value="beckmann"/>
+      <float name="alpha" value="0.15"/><string name="material" value="Cu"/></bsdf></bsdf>
+  </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/><translate x="0.1" y="0.98" z="0.3"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="8, 8, 6"/></emitter>
+  </shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.2"/><translate x="0.5" y="-0.8" z="0.4"/></transform>
+    <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf></bsdf></shape>
+  <shape type="sphere"><point name="center" x="-0.1" y="-0.75" z="0.2"/><float name="radius" value="0.2"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf></shape>
+</scene>)", std::filesystem::temp_directory_path().string(), &desc, {});
+  ASSERT_TRUE(room);
+  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  const DiffuseSceneView& view = room->diffuse_scene()->view();
+  EXPECT_EQ(view.shape_flags[0] & kShapeReflectsNothing, 0u);
+  EXPECT_EQ(view.shape_flags[1] & kShapeReflectsNothing, 0u);
+  for (size_t i : {2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapeReflectsNothing, 0u) << "shape " << i;
+  EXPECT_NE(view.shape_flags[4] & kShapeScalar, 0u);
+  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
+}
+
 TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
   Scene desc;
   auto room = load_room(&desc);
