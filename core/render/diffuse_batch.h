@@ -4,12 +4,14 @@
 // paths at a time by an AVX2 or AVX-512 kernel (diffuse_vertex_kernel.inl;
 // "diffuse" for the BSDF it began with), the rays cast as the scalar batch
 // casts them. Every path's radiance is the scalar batch's bit for bit, so an
-// image does not depend on which CPU rendered it. Paths hand over to the
-// scalar stages for what the kernel leaves out: emission seen along a ray (a
-// few per cent of hits, scalar either way), whole vertices on shapes it does
-// not shade (spheres, other BSDFs: kShapeScalar), and the last ray under
-// max_depth. Next-event estimation towards emitters other than triangle and
-// sphere area lights calls FrameScene's own sampling lane by lane.
+// image does not depend on which CPU rendered it. Lanes take the scalar
+// stages for what the kernel leaves out: emission seen along a ray (a few
+// per cent of hits, scalar either way) and whole vertices on shapes it does
+// not shade (spheres, other BSDFs: kShapeScalar); a hit on a shape that
+// reflects nothing ends the path there, and the last ray under max_depth is
+// cast from the batch's own state, as cast_last_stream casts it. Next-event
+// estimation towards emitters other than triangle and sphere area lights
+// calls FrameScene's own sampling lane by lane.
 //
 // On cbox this made the path tracer's own code per ray about 1.9x faster
 // (docs/foundation.md, fifteenth round); on veach-mis, with conductors and
