@@ -53,6 +53,13 @@ class Distribution2D {
   // is small enough to stay cached.
   Vec2f prefetch_sample(Vec2f u) const;
 
+  // The alias tables sample() reads (for a vector kernel that repeats it):
+  // the marginal's height() slots, then width() slots per row.
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const AliasSlot* marginal_slots() const { return marginal_.data(); }
+  const AliasSlot* row_slots() const { return rows_.data(); }
+
  private:
   int width_ = 0, height_ = 0;
   std::vector<AliasSlot> marginal_;  // empty when no weight is positive

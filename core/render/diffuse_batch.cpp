@@ -30,6 +30,7 @@ void load_path(const PathState& st, int i, DiffuseBatchState* s) {
   set_lane(s->direct, i, st.direct);
   set_lane(s->prev_p, i, st.prev_p);
   s->prev_pdf[i] = st.prev_bsdf_pdf;
+  s->eta[i] = st.eta;
   s->prev_delta[i] = st.prev_bsdf_delta ? -1 : 0;
   s->depth[i] = st.depth;
 }
@@ -44,6 +45,7 @@ void store_path(const DiffuseBatchState& s, int i, PathState* st) {
   st->direct = lane_rgb(s.direct, i);
   st->prev_p = lane3(s.prev_p, i);
   st->prev_bsdf_pdf = s.prev_pdf[i];
+  st->eta = s.eta[i];
   st->prev_bsdf_delta = s.prev_delta[i] != 0;
   st->depth = s.depth[i];
   st->shadow_pending = false;
@@ -61,15 +63,16 @@ void log_lanes(const int* which, int n, bool shadow, GeometrySet set, RayCoheren
   for (int k = 0; k < n; ++k) log_ray(ray_of_lane(which[k]), shadow, set, stream, counters, coherence);
 }
 
-// add_emission() for lane i, whose ray hit an emitter: through a PathState,
-// so that the sums come out as the scalar stage leaves them. Scalar: a few
-// per cent of hits, and it needs the emitter's own pdf.
+// add_emission() for lane i, whose ray hit an emitter (`hit`) or left the
+// scene (null: the environment's radiance): through a PathState, so that the
+// sums come out as the scalar stage leaves them. Scalar: a few per cent of
+// hits, and it needs the emitter's own pdf.
 void add_emission_on_lane(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* s, int i,
-                          const RayHit& hit, PathState* scratch) {
+                          const RayHit* hit, PathState* scratch) {
   scratch->ray = ray_of(*s, i);
-  scratch->hit = true;
+  scratch->hit = hit != nullptr;
   scratch->blocked = false;
-  scene.interaction(scratch->ray, hit, &scratch->si);
+  if (hit) scene.interaction(scratch->ray, *hit, &scratch->si);
   scratch->depth = s->depth[i];
   scratch->throughput = lane_rgb(s->throughput, i);
   scratch->result = lane_rgb(s->result, i);
@@ -110,31 +113,50 @@ void shade_vertex_on_lane(const FrameScene& scene, const PathTracerSettings& set
   }
 }
 
+// add_emission() for lanes[0..n), whose rays left the scene: by the kernel
+// where the environment is a map, else lane by lane.
+void add_environment(const FrameScene& scene, const PathTracerSettings& settings, const DiffuseSceneView& view,
+                     const DiffuseKernel& kernel, DiffuseBatchState* s, const int32_t* lanes, int n,
+                     PathState* scratch) {
+  if (n == 0 || !scene.has_environment()) return;
+  if (view.envmap) {
+    kernel.add_environment(view, s, lanes, n, settings.hide_emitters);
+    return;
+  }
+  for (int k = 0; k < n; ++k) add_emission_on_lane(scene, settings, s, lanes[k], nullptr, scratch);
+}
+
 // cast_last_stream() and add_emission() for lanes live[0..count), whose rays
 // are their paths' last under max_depth: the emitters-only query, the any-hit
-// query before the emitter for the lanes that found one, and the emission of
-// those that see it. In a scene of the vector batch a ray that finds no
-// emitter sees nothing (it has no environment).
-void cast_last_rays(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* s,
-                    const int* live, int count, RayCoherence coherence, RayStream& stream, PathCounters& counters,
-                    PathState* scratch) {
+// query before the emitter (or, for a ray that found none, towards the
+// environment) and the emission of those that see it.
+void cast_last_rays(const FrameScene& scene, const PathTracerSettings& settings, const DiffuseSceneView& view,
+                    const DiffuseKernel& kernel, DiffuseBatchState* s, const int* live, int count,
+                    RayCoherence coherence, RayStream& stream, PathCounters& counters, PathState* scratch) {
   log_lanes(live, count, false, GeometrySet::kEmitters, coherence, counters, [s](int i) { return ray_of(*s, i); });
   for (int k = 0; k < count; ++k) {
     const int i = live[k];
     stream.set(k, lane3(s->o, i), lane3(s->d, i), s->tmin[i], s->tmax[i]);
   }
   scene.accelerator().intersect_stream(stream, count, GeometrySet::kEmitters, coherence);
+  // take_last_hit: the any-hit query is the ray itself (tmin included),
+  // stopped short of the emitter at the interaction's distance; a ray that
+  // found no emitter asks it whole where an environment would be seen.
   int found[kPathBatch];
   RayHit hits[kPathBatch];
+  bool escaped[kPathBatch];
   int m = 0;
   for (int k = 0; k < count; ++k) {
-    if (!stream.found(k)) continue;
     const int i = live[k];
-    hits[m] = stream.hit(k);
-    // take_last_hit: the any-hit query is the ray itself (tmin included),
-    // stopped short of the emitter at the interaction's distance.
-    scene.interaction(ray_of(*s, i), hits[m], &scratch->si);
-    s->shadow_tmax[i] = scratch->si.t * (1.0f - kShadowEpsilon);
+    escaped[m] = !stream.found(k);
+    if (escaped[m]) {
+      if (!scene.has_environment()) continue;
+      s->shadow_tmax[i] = s->tmax[i];
+    } else {
+      hits[m] = stream.hit(k);
+      scene.interaction(ray_of(*s, i), hits[m], &scratch->si);
+      s->shadow_tmax[i] = scratch->si.t * (1.0f - kShadowEpsilon);
+    }
     found[m++] = i;
   }
   if (m == 0) return;
@@ -149,8 +171,14 @@ void cast_last_rays(const FrameScene& scene, const PathTracerSettings& settings,
     stream.set(k, r.o, r.d, r.tmin, r.tmax);
   }
   scene.accelerator().occluded_stream(stream, m);
-  for (int k = 0; k < m; ++k)
-    if (!stream.occluded(k)) add_emission_on_lane(scene, settings, s, found[k], hits[k], scratch);
+  int32_t seen_environment[kPathBatch];
+  int e = 0;
+  for (int k = 0; k < m; ++k) {
+    if (stream.occluded(k)) continue;
+    if (escaped[k]) seen_environment[e++] = found[k];
+    else add_emission_on_lane(scene, settings, s, found[k], &hits[k], scratch);
+  }
+  add_environment(scene, settings, view, kernel, s, seen_environment, e, scratch);
 }
 
 }  // namespace
@@ -161,8 +189,8 @@ const std::vector<DiffuseKernel>& diffuse_kernels() {
 #if defined(GDVR_AVX2_KERNELS)
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
         __builtin_cpu_supports("avx512dq"))
-      k.push_back({"avx512", shade_diffuse_vertices_avx512});
-    if (__builtin_cpu_supports("avx2")) k.push_back({"avx2", shade_diffuse_vertices_avx2});
+      k.push_back({"avx512", shade_diffuse_vertices_avx512, add_environment_avx512});
+    if (__builtin_cpu_supports("avx2")) k.push_back({"avx2", shade_diffuse_vertices_avx2, add_environment_avx2});
 #endif
     return k;
   }();
@@ -193,6 +221,7 @@ void start_lane(DiffuseBatchState* s, int i, const Ray& camera_ray, const Sample
   set_lane(s->direct, i, Rgb(0.0f));
   set_lane(s->prev_p, i, camera_ray.o);
   s->prev_pdf[i] = 1.0f;
+  s->eta[i] = 1.0f;
   s->prev_delta[i] = -1;
   s->depth[i] = 0;
 }
@@ -222,6 +251,7 @@ void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettin
   int count = n;
   for (int i = 0; i < n; ++i) live[i] = i;
   PathState scratch;
+  const bool prefetch = scene.has_environment();
   // The batch's paths take their vertices in step (path_batch.cpp), so the
   // live ones share one depth.
   const int last = last_vertex_depth(settings);
@@ -233,16 +263,30 @@ void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettin
       const int i = live[k];
       stream.set(k, lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]);
     }
+    if (prefetch) {
+      // prefetch_for_next_vertex, as the scalar batch does before its casts:
+      // an environment map's tables, for the lanes' next emitter samples.
+      for (int k = 0; k < count; ++k) {
+        Sampler ahead;
+        ahead.generator().restore(s.rng_state[live[k]], s.rng_inc[live[k]]);
+        scene.prefetch_next_emitter_sample(ahead);
+      }
+    }
     scene.accelerator().intersect_stream(stream, count, GeometrySet::kAll, coherence);
+    int32_t escaped[kPathBatch];
+    int escapes = 0;
     for (int k = 0; k < count; ++k) {
       const int i = live[k];
-      if (!stream.found(k)) continue;  // no environment: nothing is seen, the path ends
+      if (!stream.found(k)) {  // the path ends, seeing the environment if there is one
+        escaped[escapes++] = i;
+        continue;
+      }
       const RayHit hit = stream.hit(k);
       const uint32_t flags = view.shape_flags[hit.id];
       if (flags & kShapeReflectsNothing) {
         // add_emission, then the path ends (kShapeReflectsNothing).
         if (scene.emitter_of_shape(hit.id) >= 0 && !(depth == 0 && settings.hide_emitters))
-          add_emission_on_lane(scene, settings, &s, i, hit, &scratch);
+          add_emission_on_lane(scene, settings, &s, i, &hit, &scratch);
         s.continues[i] = s.shadow_pending[i] = 0;
         scalar_shaded[i] = -1;
         continue;
@@ -258,8 +302,10 @@ void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettin
       s.hit_v[i] = hit.v;
       s.shade[i] = -1;
       if (scene.emitter_of_shape(hit.id) >= 0 && !(depth == 0 && settings.hide_emitters))
-        add_emission_on_lane(scene, settings, &s, i, hit, &scratch);
+        add_emission_on_lane(scene, settings, &s, i, &hit, &scratch);
     }
+
+    add_environment(scene, settings, view, *kernel, &s, escaped, escapes, &scratch);
 
     // ---- Eight paths' vertices at a time ----
     kernel->shade(view, &s);
@@ -298,7 +344,7 @@ void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettin
   // ---- The live paths' last ray, then every path's sums ----
   if (count > 0) {
     const RayCoherence coherence = last == 0 ? RayCoherence::kCoherent : RayCoherence::kIncoherent;
-    cast_last_rays(scene, settings, &s, live, count, coherence, stream, counters, &scratch);
+    cast_last_rays(scene, settings, view, *kernel, &s, live, count, coherence, stream, counters, &scratch);
   }
   for (int i = 0; i < n; ++i) out[i] = finish_path(lane_rgb(s.result, i), lane_rgb(s.direct, i), counters);
 }

@@ -29,6 +29,8 @@ namespace gdvr {
 struct DiffuseKernel {
   const char* isa;  // "avx512", "avx2"
   void (*shade)(const DiffuseSceneView& scene, DiffuseBatchState* state);
+  void (*add_environment)(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+                          bool hide_camera_rays);
 };
 // The kernels this CPU can run, fastest first; empty where it has no AVX2
 // (or the build is not for x86-64).

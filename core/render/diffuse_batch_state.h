@@ -90,6 +90,29 @@ struct alignas(64) SphereEmitterRecord {
 };
 static_assert(sizeof(SphereEmitterRecord) == 64);
 
+// A slot of an alias table as core/math/alias_table.h lays it out
+// (AliasSlot; diffuse_scene.cpp checks that the two agree).
+struct AliasSlotRecord {
+  float q;
+  uint32_t alias;
+  float pmf, alias_pmf;
+};
+
+// The environment map, where the scene's environment is one: FrameScene's
+// tables (Distribution2D), its texels and its frame, which the kernel
+// samples as FrameScene::sample_emitter_direction does.
+struct EnvmapRecord {
+  const AliasSlotRecord* marginal;  // `height` slots
+  const AliasSlotRecord* rows;      // `width` slots per row
+  int width, height;
+  const float* texels;  // `channels` floats per texel, rows of image_width
+  int image_width, image_height, channels;
+  double to_world[3][3];  // Transform::vector's rows
+  double to_local[3][3];  // the inverse's (FrameScene::Envmap::to_local)
+  float scale;
+  uint32_t emitter;  // its index among the scene's emitters
+};
+
 // FrameScene::sample_emitter_direction's answer, as plain data.
 struct EmitterSampleLane {
   float d[3];
@@ -122,6 +145,9 @@ struct DiffuseSceneView {
   // emitter -> its sphere, where the scene has sphere emitters (else null):
   // the kernel samples those from outside the sphere itself.
   const SphereEmitterRecord* emitter_spheres = nullptr;
+  // The environment map, where the environment is one with a positive
+  // weight (else null): the kernel samples it itself.
+  const EnvmapRecord* envmap = nullptr;
   const void* frame_scene = nullptr;  // sample_emitter's first argument
   const uint32_t* emitter_first = nullptr;  // emitter -> its first emitter record
   // emitter -> its triangles' area distribution (FrameScene's, so the same
@@ -141,6 +167,10 @@ struct alignas(64) DiffuseBatchState {
   alignas(64) float tmin[kDiffuseBatch], tmax[kDiffuseBatch];
   alignas(64) float throughput[3][kDiffuseBatch], result[3][kDiffuseBatch], direct[3][kDiffuseBatch];
   alignas(64) float prev_p[3][kDiffuseBatch], prev_pdf[kDiffuseBatch];
+  // The relative index of refraction along the path (PathState::eta), for
+  // Russian roulette: a lane that went through glass on the scalar stages
+  // carries it into the kernel's vertices, which leave it as it is.
+  alignas(64) float eta[kDiffuseBatch];
   alignas(64) int32_t prev_delta[kDiffuseBatch], depth[kDiffuseBatch];
   // The closest hit of the ray (shape id, triangle, barycentrics).
   alignas(64) int32_t hit_shape[kDiffuseBatch], hit_prim[kDiffuseBatch];
@@ -162,5 +192,15 @@ struct alignas(64) DiffuseBatchState {
 // CPU has it.
 void shade_diffuse_vertices_avx2(const DiffuseSceneView& scene, DiffuseBatchState* state);
 void shade_diffuse_vertices_avx512(const DiffuseSceneView& scene, DiffuseBatchState* state);
+
+// add_emission for lanes[0..n), whose rays left the scene, where the scene
+// view has an environment map (DiffuseSceneView::envmap): its radiance along
+// each ray, MIS-weighted against sampling it, added to the lane's sums
+// (direct too at depth 0), bit for bit as the scalar stage adds it.
+// `hide_camera_rays`: PathTracerSettings::hide_emitters.
+void add_environment_avx2(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+                          bool hide_camera_rays);
+void add_environment_avx512(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+                            bool hide_camera_rays);
 
 }  // namespace gdvr

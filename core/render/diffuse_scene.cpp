@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include "core/render/frame_scene.h"
 
@@ -73,10 +74,6 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
     return std::unique_ptr<DiffuseScene>();
   };
   if (scene.emitters.empty()) return fail("the scene has no emitter");
-  // Rays that leave the scene would need the environment's radiance.
-  for (size_t e = 0; e < scene.emitters.size(); ++e)
-    if (scene.emitters[e].type == EmitterType::kConstant || scene.emitters[e].type == EmitterType::kEnvmap)
-      return fail("emitter " + std::to_string(e) + " is an environment");
   size_t triangle_count = 0, vector_shapes = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
     if (shading_kind(scene, i) == kShapeScalar) continue;
@@ -188,8 +185,39 @@ bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_n
   return true;
 }
 
+static_assert(sizeof(AliasSlotRecord) == sizeof(AliasSlot) && offsetof(AliasSlotRecord, q) == offsetof(AliasSlot, q) &&
+                  offsetof(AliasSlotRecord, alias) == offsetof(AliasSlot, alias) &&
+                  offsetof(AliasSlotRecord, pmf) == offsetof(AliasSlot, pmf) &&
+                  offsetof(AliasSlotRecord, alias_pmf) == offsetof(AliasSlot, alias_pmf),
+              "AliasSlotRecord mirrors AliasSlot");
+
 void DiffuseScene::bake_emitters(const FrameScene& fs) {
   const Scene& scene = fs.scene_;
+  // The environment map's tables and frame (its to_world may be animated).
+  has_envmap_ = false;
+  if (fs.environment_ >= 0 && scene.emitters[size_t(fs.environment_)].type == EmitterType::kEnvmap) {
+    const Emitter& em = scene.emitters[size_t(fs.environment_)];
+    const FrameScene::Envmap& env = fs.envmaps_[size_t(fs.environment_)];
+    if (!env.distribution.empty()) {
+      has_envmap_ = true;
+      const Distribution2D& dist = env.distribution;
+      envmap_.marginal = reinterpret_cast<const AliasSlotRecord*>(dist.marginal_slots());
+      envmap_.rows = reinterpret_cast<const AliasSlotRecord*>(dist.row_slots());
+      envmap_.width = dist.width();
+      envmap_.height = dist.height();
+      envmap_.texels = env.image->data().data();
+      envmap_.image_width = env.image->width();
+      envmap_.image_height = env.image->height();
+      envmap_.channels = env.image->channels();
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          envmap_.to_world[r][c] = em.to_world.matrix().m[size_t(r)][size_t(c)];
+          envmap_.to_local[r][c] = env.to_local.matrix().m[size_t(r)][size_t(c)];
+        }
+      envmap_.scale = em.scale;
+      envmap_.emitter = uint32_t(fs.environment_);
+    }
+  }
   emitter_triangles_.clear();
   emitter_spheres_.clear();
   emitter_first_.assign(scene.emitters.size(), 0);
@@ -240,6 +268,7 @@ void DiffuseScene::update_view() {
   view_.emitter_triangles = emitter_triangles_.empty() ? nullptr : emitter_triangles_.data();
   view_.sample_emitter = sample_emitter_lane;
   view_.emitter_spheres = emitter_spheres_.empty() ? nullptr : emitter_spheres_.data();
+  view_.envmap = has_envmap_ ? &envmap_ : nullptr;
   view_.frame_scene = frame_scene_;
   view_.emitter_first = emitter_first_.data();
   view_.emitter_choice = emitter_choice_.data();

@@ -56,6 +56,8 @@ class DiffuseScene {
   std::vector<size_t> animated_shapes_;
   std::vector<EmitterTriangleRecord> emitter_triangles_;
   std::vector<SphereEmitterRecord> emitter_spheres_;  // empty without sphere emitters
+  EnvmapRecord envmap_{};
+  bool has_envmap_ = false;
   std::vector<uint32_t> emitter_first_;
   std::vector<const Distribution1D*> emitter_choice_;
   const FrameScene* frame_scene_ = nullptr;  // owns these records

@@ -21,8 +21,8 @@
 // No multiply-add is fused (-ffp-contract=off for the whole build), so the
 // vector and scalar forms round alike; DiffuseBatchTest checks every kernel
 // against the scalar batch bit for bit.
-#ifndef GDVR_DIFFUSE_KERNEL
-#error "define GDVR_DIFFUSE_KERNEL (the entry point's name) before including this file"
+#if !defined(GDVR_DIFFUSE_KERNEL) || !defined(GDVR_ENVIRONMENT_KERNEL)
+#error "define GDVR_DIFFUSE_KERNEL and GDVR_ENVIRONMENT_KERNEL (the entry points' names) before including this file"
 #endif
 
 #include <immintrin.h>
@@ -356,6 +356,109 @@ inline vd vsqrt_d(vd x) {
 typedef int64_t vl __attribute__((vector_size(64)));
 inline vd vsel_d(vl m, vd a, vd b) { return m ? a : b; }
 
+// sample_alias (alias_table.cpp) on one lane: the bin, its pmf and the
+// number remapped within it. Ternaries where it has std::min and std::clamp
+// (their instances here could be linked into code for other CPUs).
+struct AliasPick {
+  uint32_t index;
+  float pmf, u;
+};
+inline AliasPick alias_pick(const AliasSlotRecord* slots, uint32_t n, float u) {
+  const double scaled = double(u) * double(n);
+  size_t k = size_t(scaled);
+  if (k > size_t(n) - 1) k = size_t(n) - 1;
+  double frac = scaled - double(k);
+  frac = frac < 0.0 ? 0.0 : (1.0 < frac ? 1.0 : frac);
+  const AliasSlotRecord& slot = slots[k];
+  AliasPick pick;
+  double r;
+  if (frac < double(slot.q)) {
+    pick.index = uint32_t(k);
+    pick.pmf = slot.pmf;
+    r = frac / double(slot.q);
+  } else {
+    pick.index = slot.alias;
+    pick.pmf = slot.alias_pmf;
+    r = slot.q < 1.0f ? (frac - double(slot.q)) / (1.0 - double(slot.q)) : 0.0;
+  }
+  const double top = double(0x1.fffffep-1f);
+  pick.u = float(r < 0.0 ? 0.0 : (top < r ? top : r));
+  return pick;
+}
+
+// envmap_lookup (frame_scene.cpp) at (u, v) for the lanes in m (zero
+// elsewhere): envmap_texels lane by lane, the bilinear weights in vector.
+inline V3 envmap_lookup(const EnvmapRecord& env, vi m, vf u, vf v) {
+  alignas(32) float fx_l[kLanes], fy_l[kLanes], t[4][3][kLanes];
+  const int iw = env.image_width, ih = env.image_height, ch = env.channels;
+  for (int i = 0; i < kLanes; ++i) {
+    fx_l[i] = fy_l[i] = 0.0f;
+    for (int q = 0; q < 4; ++q) t[q][0][i] = t[q][1][i] = t[q][2][i] = 0.0f;
+    if (!m[i]) continue;
+    const float x = (0.0f < u[i] ? u[i] : 0.0f) * float(iw), y = (0.0f < v[i] ? v[i] : 0.0f) * float(ih - 1);
+    int x0 = int(x), y0 = int(y);
+    if (iw < x0) x0 = iw;
+    if (ih - 1 < y0) y0 = ih - 1;
+    const float fx = x - float(x0), fy = y - float(y0);
+    fx_l[i] = fx < 0.0f ? 0.0f : (1.0f < fx ? 1.0f : fx);
+    fy_l[i] = fy < 0.0f ? 0.0f : (1.0f < fy ? 1.0f : fy);
+    int x1 = x0 + 1;
+    if (x0 >= iw) x0 -= iw;
+    if (x1 >= iw) x1 -= iw;
+    const int y1 = y0 + 1 < ih - 1 ? y0 + 1 : ih - 1;
+    const int xs[4] = {x0, x1, x0, x1}, ys[4] = {y0, y0, y1, y1};
+    for (int q = 0; q < 4; ++q) {
+      const float* p = env.texels + (size_t(ys[q]) * size_t(iw) + size_t(xs[q])) * size_t(ch);
+      t[q][0][i] = p[0], t[q][1][i] = p[1], t[q][2][i] = p[2];
+    }
+  }
+  const vf fx = load<vf>(fx_l), fy = load<vf>(fy_l);
+  auto bilinear = [&](int c) {
+    return (load<vf>(t[0][c]) * (1.0f - fx) + load<vf>(t[1][c]) * fx) * (1.0f - fy) +
+           (load<vf>(t[2][c]) * (1.0f - fx) + load<vf>(t[3][c]) * fx) * fy;
+  };
+  return V3{bilinear(0), bilinear(1), bilinear(2)};
+}
+
+// FrameScene::sample_emitter_direction's environment map case for the lanes
+// in m, from (ux, uy): Distribution2D::sample (lane by lane: the tables are
+// read at data-dependent places), uv_to_direction, Transform::vector,
+// envmap_lookup (envmap_texels lane by lane). Returns where a sample was
+// made; there d, pdf (emitter selection included) and weight are set.
+inline vi sample_envmap(const EnvmapRecord& env, float select_pdf, vi m, vf ux, vf uy, V3* d, vf* pdf,
+                        V3* weight) {
+  alignas(32) float xi[kLanes], yi[kLanes], xu[kLanes], yu[kLanes], xp[kLanes], yp[kLanes];
+  for (int i = 0; i < kLanes; ++i) {
+    xi[i] = yi[i] = xu[i] = yu[i] = xp[i] = yp[i] = 0.0f;
+    if (!m[i]) continue;
+    const AliasPick y = alias_pick(env.marginal, uint32_t(env.height), uy[i]);
+    const AliasPick x = alias_pick(env.rows + size_t(y.index) * size_t(env.width), uint32_t(env.width), ux[i]);
+    xi[i] = float(x.index), yi[i] = float(y.index);
+    xu[i] = x.u, yu[i] = y.u;
+    xp[i] = x.pmf, yp[i] = y.pmf;
+  }
+  const vf pdf_uv = load<vf>(yp) * load<vf>(xp) * float(env.width) * float(env.height);
+  const vf u = (load<vf>(xi) + load<vf>(xu)) / float(env.width);
+  const vf v = (load<vf>(yi) + load<vf>(yu)) / float(env.height);
+  // uv_to_direction
+  vf sin_theta, cos_theta, sin_phi, cos_phi;
+  vsincos_turns(0.5f * v, &sin_theta, &cos_theta);
+  vsincos_turns(u, &sin_phi, &cos_phi);
+  const V3 local{sin_phi * sin_theta, cos_theta, -cos_phi * sin_theta};
+  const vi ok = m & (sin_theta > 1e-7f) & (pdf_uv > 0.0f);
+  // Transform::vector, in double as there.
+  const vd lx = to_double(local.x), ly = to_double(local.y), lz = to_double(local.z);
+  const double(*w)[3] = env.to_world;
+  *d = vnormalize(V3{to_single(w[0][0] * lx + w[0][1] * ly + w[0][2] * lz),
+                     to_single(w[1][0] * lx + w[1][1] * ly + w[1][2] * lz),
+                     to_single(w[2][0] * lx + w[2][1] * ly + w[2][2] * lz)});
+  *pdf = pdf_uv / (2.0f * kPi * kPi * sin_theta) * select_pdf;
+  const V3 texel = envmap_lookup(env, ok, u, v);
+  const vf inv_pdf = 1.0f / *pdf;
+  *weight = V3{texel.x * env.scale * inv_pdf, texel.y * env.scale * inv_pdf, texel.z * env.scale * inv_pdf};
+  return ok;
+}
+
 // sphere_point_in_cone (sampling.h): (sin c, cos c), in float where the
 // cone is narrow (sin^2 alpha <= 1/16) and in double elsewhere.
 inline void sphere_point_in_cone(vf sin2_alpha, vf u, vf* sin_c, vf* cos_c) {
@@ -473,6 +576,98 @@ struct VConductor {
     return ok;
   }
 };
+
+// atan2_turns (arctan.h).
+inline vf vatan2_turns(vf y, vf x) {
+  const vf sum = x + y;
+  const vf ax = vabs(x), ay = vabs(y);
+  const vf hi = vmax(ax, ay), lo = vmin(ax, ay);
+  const vf a = vsel(hi > 0.0f, lo / hi, splat(0.0f));
+  const vf s = a * a;
+  vf t = a * (0.15915492177009583f +
+              s * (-0.05304967612028122f +
+                   s * (0.03178545460104942f +
+                        s * (-0.022328631952404976f +
+                             s * (0.015824681147933006f +
+                                  s * (-0.00953451357781887f +
+                                       s * (0.003908644430339336f + s * -0.0007609020103700459f)))))));
+  t = vsel(ay > ax, 0.25f - t, t);
+  t = vsel((vi)x < 0, 0.5f - t, t);  // signbit(x)
+  const vf signed_t = (vf)(((vu)t & 0x7fffffffu) | ((vu)y & 0x80000000u));  // copysign(t, y)
+  return vsel(sum != sum, sum, signed_t);
+}
+// acos_half_turns (arctan.h).
+inline vf vacos_half_turns(vf c) {
+  c = vclamp(c, -1.0f, 1.0f);
+  return 2.0f * vatan2_turns(vsqrt((1.0f - c) * (1.0f + c)), c);
+}
+
+// add_emission for lanes whose rays left the scene, with an environment
+// map: FrameScene::environment_along (Transform::vector in double,
+// direction_to_uv, envmap_lookup, envmap_direction_pdf with
+// Distribution2D::pdf) and the MIS-weighted sum, eight lanes of `lanes` at
+// a time.
+void add_environment_group(const DiffuseSceneView& scene, DiffuseBatchState* st, const int32_t* lanes, int n,
+                           bool hide_camera_rays) {
+  const EnvmapRecord& env = *scene.envmap;
+  alignas(32) float dl[3][kLanes], tl[3][kLanes], rl[3][kLanes], il[3][kLanes], prev_pdf[kLanes];
+  alignas(32) int32_t prev_delta[kLanes], depth_l[kLanes], active_l[kLanes];
+  for (int i = 0; i < kLanes; ++i) {
+    const int lane = i < n ? lanes[i] : lanes[0];
+    active_l[i] = i < n ? -1 : 0;
+    for (int c = 0; c < 3; ++c) {
+      dl[c][i] = st->d[c][lane];
+      tl[c][i] = st->throughput[c][lane];
+      rl[c][i] = st->result[c][lane];
+      il[c][i] = st->direct[c][lane];
+    }
+    prev_pdf[i] = st->prev_pdf[lane];
+    prev_delta[i] = st->prev_delta[lane];
+    depth_l[i] = st->depth[lane];
+  }
+  const vi depth = load<vi>(depth_l);
+  vi m = load<vi>(active_l);
+  if (hide_camera_rays) m &= depth != 0;
+  // environment_along
+  const vd dx = to_double(load<vf>(dl[0])), dy = to_double(load<vf>(dl[1])), dz = to_double(load<vf>(dl[2]));
+  const double(*w)[3] = env.to_local;
+  const V3 local = vnormalize(V3{to_single(w[0][0] * dx + w[0][1] * dy + w[0][2] * dz),
+                                 to_single(w[1][0] * dx + w[1][1] * dy + w[1][2] * dz),
+                                 to_single(w[2][0] * dx + w[2][1] * dy + w[2][2] * dz)});
+  const vf u_signed = vatan2_turns(local.x, -local.z);
+  const vf u = vsel(u_signed < 0.0f, u_signed + 1.0f, u_signed), v = vacos_half_turns(local.y);
+  const V3 texel = envmap_lookup(env, m, u, v);
+  const V3 radiance{texel.x * env.scale, texel.y * env.scale, texel.z * env.scale};
+  // envmap_direction_pdf: Distribution2D::pdf lane by lane.
+  alignas(32) float table_pdf[kLanes];
+  for (int i = 0; i < kLanes; ++i) {
+    table_pdf[i] = 0.0f;
+    if (!m[i]) continue;
+    int x = int(u[i] * float(env.width)), y = int(v[i] * float(env.height));
+    x = x < 0 ? 0 : (env.width - 1 < x ? env.width - 1 : x);
+    y = y < 0 ? 0 : (env.height - 1 < y ? env.height - 1 : y);
+    table_pdf[i] = env.marginal[y].pmf * env.rows[size_t(y) * size_t(env.width) + size_t(x)].pmf *
+                   float(env.width) * float(env.height);
+  }
+  const vf xz = local.x * local.x + local.z * local.z;
+  const vf sin_theta = vsqrt(vsel(xz < 1e-14f, splat(1e-14f), xz));
+  const vf pdf = load<vf>(table_pdf) / (2.0f * kPi * kPi * sin_theta) * scene.select_pdf;
+  // add_emission's sum.
+  const vi seen = m & ~is_black(radiance);
+  const vf weight = vsel(load<vi>(prev_delta) != 0, splat(1.0f), mis_power(load<vf>(prev_pdf), pdf));
+  const V3 throughput{load<vf>(tl[0]), load<vf>(tl[1]), load<vf>(tl[2])};
+  const V3 contrib = throughput * radiance * weight;
+  const V3 result = V3{load<vf>(rl[0]), load<vf>(rl[1]), load<vf>(rl[2])} + contrib;
+  const V3 direct = V3{load<vf>(il[0]), load<vf>(il[1]), load<vf>(il[2])} + contrib;
+  const vi camera = seen & (depth == 0);
+  for (int i = 0; i < n && i < kLanes; ++i) {
+    if (!seen[i]) continue;
+    const int lane = lanes[i];
+    st->result[0][lane] = result.x[i], st->result[1][lane] = result.y[i], st->result[2][lane] = result.z[i];
+    if (!camera[i]) continue;
+    st->direct[0][lane] = direct.x[i], st->direct[1][lane] = direct.y[i], st->direct[2][lane] = direct.z[i];
+  }
+}
 
 void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi shade) {
   VPcg32 rng{load<vu64>(&st->rng_state[k]), load<vu64>(&st->rng_inc[k])};
@@ -609,12 +804,12 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
     // spots, directional lights, smooth area lights, a point inside a
     // sphere) by FrameScene itself, lane by lane.
     vi here = vi{};
+    alignas(32) uint32_t index[kLanes];
+    for (int i = 0; i < kLanes; ++i) {
+      const uint32_t e = uint32_t(u_select[i] * float(scene.emitter_count));
+      index[i] = shade[i] ? (e < scene.emitter_count - 1 ? e : scene.emitter_count - 1) : 0u;
+    }
     if (scene.emitter_spheres) {
-      uint32_t index[kLanes];
-      for (int i = 0; i < kLanes; ++i) {
-        const uint32_t e = uint32_t(u_select[i] * float(scene.emitter_count));
-        index[i] = shade[i] ? (e < scene.emitter_count - 1 ? e : scene.emitter_count - 1) : 0u;
-      }
       const RecordLanes sp = load_records(scene.emitter_spheres, index);
       const V3 center{sp.f[0], sp.f[1], sp.f[2]}, radiance{sp.f[4], sp.f[5], sp.f[6]};
       const vf radius = sp.f[3], flip = sp.f[7];
@@ -648,6 +843,20 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
         dist = vsel(here, sdist, splat(0.0f));
         es_pdf = vsel(here, spdf, splat(0.0f));
         weight = vsel3(here & ok & (vdot(ln, sd) < 0.0f), radiance * (1.0f / spdf), zero);
+      }
+    }
+    if (scene.envmap) {
+      const vi env = shade & ~here & ((vu)load<vi>(index) == scene.envmap->emitter);
+      if (!_mm256_testz_si256((__m256i)env, (__m256i)env)) {
+        V3 env_d, env_weight;
+        vf env_pdf;
+        const vi ok = sample_envmap(*scene.envmap, scene.select_pdf, env, ux, uy, &env_d, &env_pdf, &env_weight);
+        const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
+        es_d = vsel3(ok, env_d, es_d);
+        dist = vsel(ok, splat(kInfinity), dist);
+        es_pdf = vsel(ok, env_pdf, es_pdf);
+        weight = vsel3(ok, env_weight, vsel3(env, zero, weight));
+        here |= env;
       }
     }
     alignas(32) float d[3][kLanes], w[3][kLanes], dist_lanes[kLanes], pdf_lanes[kLanes];
@@ -722,11 +931,12 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   store3(st->prev_p, k, p, alive);
   store1(st->prev_pdf, k, pdf, alive);
   store1(st->prev_delta, k, vi{}, alive);
-  // Russian roulette (eta stays 1 on a diffuse path).
+  // Russian roulette (the kernel's BSDFs leave eta as it is).
   const vf throughput_max = vmax(throughput.x, vmax(throughput.y, throughput.z));
   alive &= throughput_max > 0.0f;
   const vi rr = alive & (depth + 1 >= scene.rr_depth);
-  const vf q = vmin(throughput_max * 1.0f * 1.0f, splat(1.0f));
+  const vf eta = load<vf>(&st->eta[k]);
+  const vf q = vmin(throughput_max * eta * eta, splat(1.0f));
   const vf u = rng.next_float(rr);
   alive &= ~rr | (u < q);
   throughput = vsel3(rr & alive, throughput * (1.0f / q), throughput);
@@ -737,6 +947,11 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
 }
 
 }  // namespace
+
+void GDVR_ENVIRONMENT_KERNEL(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+                             bool hide_camera_rays) {
+  for (int k = 0; k < n; k += kLanes) add_environment_group(scene, state, lanes + k, n - k, hide_camera_rays);
+}
 
 void GDVR_DIFFUSE_KERNEL(const DiffuseSceneView& scene, DiffuseBatchState* state) {
   for (int k = 0; k < kDiffuseBatch; k += kLanes) {

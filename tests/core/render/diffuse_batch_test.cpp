@@ -101,6 +101,20 @@ std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
   return load_xml_scene(xml, dir.string(), desc, {kFan, kRedPanel});
 }
 
+// A plastic cube and a sphere light: nothing the kernel shades.
+std::unique_ptr<FrameScene> load_scene_without_records(Scene* desc) {
+  return load_xml_scene(R"(<scene version="3.0.0">
+    <sensor type="perspective">
+      <transform name="to_world"><lookat origin="0, 0, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
+      <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <shape type="cube"><bsdf type="plastic"/></shape>
+    <shape type="sphere"><point name="center" x="1" y="1.5" z="-1.5"/><float name="radius" value="0.3"/>
+      <emitter type="area"><rgb name="radiance" value="10, 10, 10"/></emitter></shape>
+    <emitter type="constant"><rgb name="radiance" value="0.5, 0.5, 0.5"/></emitter>
+  </scene>)", std::filesystem::temp_directory_path().string(), desc, {});
+}
+
 TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   auto cbox = load_test_scene("cbox", kW, kH);
   ASSERT_TRUE(cbox);
@@ -125,27 +139,25 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   }
   EXPECT_EQ(conductors, 4);
   EXPECT_EQ(scalar, 3);  // the three sphere lights
+  // The environment is looked up along rays that leave, and sampled by
+  // FrameScene; the plastic shape takes the scalar stages.
   auto matpreview = load_test_scene("matpreview", kW, kH);
   ASSERT_TRUE(matpreview);
-  EXPECT_EQ(matpreview->scene->diffuse_scene(), nullptr);
-  EXPECT_NE(matpreview->scene->why_not_diffuse().find("is an environment"), std::string::npos)
-      << matpreview->scene->why_not_diffuse();
+  ASSERT_NE(matpreview->scene->diffuse_scene(), nullptr) << matpreview->scene->why_not_diffuse();
+  const DiffuseSceneView& mv = matpreview->scene->diffuse_scene()->view();
+  EXPECT_NE(mv.shape_flags[0] & kShapeTextured, 0u);  // the checkerboard floor
+  EXPECT_EQ(mv.shape_flags[1] & ~kShapeHasUvs, 0u);   // the diffuse interior
+  EXPECT_EQ(mv.shape_flags[2], kShapeScalar);          // the plastic exterior
   // Nothing for the kernel to shade: the scalar batch renders it.
-  auto none = load_mitsuba_scene_from_string(R"(<scene version="3.0.0">
-    <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
-    <shape type="cube"><bsdf type="plastic"/></shape>
-    <shape type="sphere"><float name="radius" value="0.2"/><emitter type="area"><rgb name="radiance" value="1, 1, 1"/></emitter></shape>
-  </scene>)", std::filesystem::temp_directory_path().string(), LoadOptions{});
-  ASSERT_TRUE(none.ok()) << none.status().to_string();
-  auto none_scene = FrameScene::create(none.value(), {});
-  ASSERT_TRUE(none_scene.ok());
-  EXPECT_EQ(none_scene.value()->diffuse_scene(), nullptr);
-  EXPECT_NE(none_scene.value()->why_not_diffuse().find("no shape is a triangle mesh"), std::string::npos)
-      << none_scene.value()->why_not_diffuse();
+  Scene none_desc;
+  auto none = load_scene_without_records(&none_desc);
+  ASSERT_TRUE(none);
+  EXPECT_EQ(none->diffuse_scene(), nullptr);
+  EXPECT_NE(none->why_not_diffuse().find("no shape is a triangle mesh"), std::string::npos) << none->why_not_diffuse();
 
   // What the frame statistics say was left out.
   PathTracerSettings settings;
-  EXPECT_EQ(why_no_diffuse_batch(*matpreview->scene, settings, kPathBatch), matpreview->scene->why_not_diffuse());
+  EXPECT_EQ(why_no_diffuse_batch(*none, settings, kPathBatch), none->why_not_diffuse());
   EXPECT_NE(why_no_diffuse_batch(*cbox->scene, settings, 1).find("1 at a time"), std::string::npos);
   EXPECT_EQ(why_no_diffuse_batch(*cbox->scene, settings, kPathBatch).empty(), diffuse_batch_available(*cbox->scene));
   settings.vector_kernels = false;
@@ -247,18 +259,18 @@ const Variant kVariants[] = {
     {2, 5, true, 0.2f},  {3, 1, false, 0.4f}, {12, 2, true, 0.5f},
 };
 
-TEST(DiffuseBatchTest, CboxPathsMatchTheScalarBatchBitForBit) {
-  auto ts = load_test_scene("cbox", kW, kH);
+// A bundled scene (load_test_scene), in every setting.
+void expect_bundled_scene_same_as_scalar_batch(const std::string& name) {
+  auto ts = load_test_scene(name, kW, kH);
   ASSERT_TRUE(ts);
   if (!diffuse_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*ts->scene, v, kW, kH);
 }
 
+TEST(DiffuseBatchTest, CboxPathsMatchTheScalarBatchBitForBit) { expect_bundled_scene_same_as_scalar_batch("cbox"); }
+
 TEST(DiffuseBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
-  auto ts = load_test_scene("veach-mis", kW, kH);
-  ASSERT_TRUE(ts);
-  if (!diffuse_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
-  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*ts->scene, v, kW, kH);
+  expect_bundled_scene_same_as_scalar_batch("veach-mis");
 }
 
 // The room with glossy panels: rough Beckmann conductors (two-sided and
@@ -407,6 +419,51 @@ TEST(DiffuseBatchTest, ShapesThatReflectNothingEndPathsAsTheScalarBatchDoes) {
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
+// matpreview: an environment map seen along rays that leave (and at last
+// rays) and sampled, both by the kernel; a checkerboard floor; the plastic
+// shape by the scalar stages.
+TEST(DiffuseBatchTest, MatpreviewPathsMatchTheScalarBatchBitForBit) {
+  expect_bundled_scene_same_as_scalar_batch("matpreview");
+}
+
+// An open yard under a constant sky: a diffuse floor, a rough conductor
+// panel, a plastic cube (scalar stages), a black rectangle light and a black
+// sphere that reflect nothing (the path ends there).
+TEST(DiffuseBatchTest, OpenYardUnderConstantSkyMatchesTheScalarBatchBitForBit) {
+  Scene desc;
+  auto yard = load_xml_scene(R"(<scene version="3.0.0">
+  <sensor type="perspective">
+    <float name="fov" value="70"/>
+    <transform name="to_world"><lookat origin="0, 1.2, -3" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
+  </sensor>
+  <shape type="rectangle"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.6, 0.4"/></bsdf></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.6"/><rotate y="1" angle="20"/><translate x="-0.6" y="0.6" z="0.5"/></transform>
+    <bsdf type="twosided"><bsdf type="roughconductor"><string name="distribution" value="beckmann"/>
+      <float name="alpha" value="0.15"/><string name="material" value="Cu"/></bsdf></bsdf>
+  </shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.3"/><translate x="0.6" y="0.3" z="0"/></transform>
+    <bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.8, 0.2, 0.2"/></bsdf></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.3"/><rotate x="1" angle="120"/><translate x="0.2" y="1.4" z="0.3"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="8, 8, 6"/></emitter>
+  </shape>
+  <shape type="sphere"><point name="center" x="-0.1" y="0.25" z="-0.6"/><float name="radius" value="0.25"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf></shape>
+  <emitter type="constant"><rgb name="radiance" value="0.8, 0.9, 1.2"/></emitter>
+</scene>)", std::filesystem::temp_directory_path().string(), &desc, {});
+  ASSERT_TRUE(yard);
+  ASSERT_NE(yard->diffuse_scene(), nullptr) << yard->why_not_diffuse();
+  const DiffuseSceneView& view = yard->diffuse_scene()->view();
+  EXPECT_EQ(view.shape_flags[3] & ~kShapeHasUvs, kShapeReflectsNothing);  // the rectangle light
+  EXPECT_EQ(view.shape_flags[4], kShapeScalar | kShapeReflectsNothing);  // the black sphere
+  if (!diffuse_batch_available(*yard)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*yard, v, kW, kH);
+}
+
 TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
   Scene desc;
   auto room = load_room(&desc);
@@ -418,18 +475,19 @@ TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
 // A caller that skips diffuse_batch_available() still gets the scalar
 // batch's paths, not a crash, on a scene without records.
 TEST(DiffuseBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
-  auto ts = load_test_scene("matpreview", kW, kH);
-  ASSERT_TRUE(ts);
-  ASSERT_EQ(ts->scene->diffuse_scene(), nullptr);
+  Scene desc;
+  auto scene = load_scene_without_records(&desc);
+  ASSERT_TRUE(scene);
+  ASSERT_EQ(scene->diffuse_scene(), nullptr);
   std::vector<PathState> scalar_paths, vector_paths;
-  start_paths(*ts->scene, kW, kH, kPathBatch, &scalar_paths);
-  start_paths(*ts->scene, kW, kH, kPathBatch, &vector_paths);
+  start_paths(*scene, 8, 8, kPathBatch, &scalar_paths);
+  start_paths(*scene, 8, 8, kPathBatch, &vector_paths);
   std::vector<PathSample> scalar(kPathBatch), vector(kPathBatch);
   PathCounters scalar_counters, vector_counters;
-  trace_path_batch(*ts->scene, ts->render.path, scalar_paths.data(), kPathBatch, scalar_counters, scalar.data());
+  PathTracerSettings settings;
+  trace_path_batch(*scene, settings, scalar_paths.data(), kPathBatch, scalar_counters, scalar.data());
   RayStream stream;
-  trace_diffuse_batch(*ts->scene, ts->render.path, vector_paths.data(), kPathBatch, stream, vector_counters,
-                      vector.data());
+  trace_diffuse_batch(*scene, settings, vector_paths.data(), kPathBatch, stream, vector_counters, vector.data());
   int lit = 0;
   for (int i = 0; i < kPathBatch; ++i) {
     EXPECT_TRUE(same_bits(scalar[size_t(i)].radiance, vector[size_t(i)].radiance)) << "path " << i;
@@ -470,7 +528,9 @@ TEST(DiffuseBatchTest, AnimatedShapesMatchTheScalarBatchAfterUpdates) {
 // The whole renderer: an image with the vector kernel is the scalar one's,
 // on every bundled scene the kernel serves (degenerate.xml holds zero-area
 // and needle triangles; furnace.xml is the white furnace; inside_object.xml
-// starts paths inside a closed mesh).
+// starts paths inside a closed mesh; matpreview has an environment map; in
+// glass.xml and tir.xml paths cross dielectrics on the scalar stages and
+// carry eta into the kernel's Russian roulette).
 class DiffuseRenderTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(DiffuseRenderTest, RenderIsTheSameWithAndWithoutTheVectorKernel) {
@@ -508,7 +568,9 @@ TEST_P(DiffuseRenderTest, RenderIsTheSameWithAndWithoutTheVectorKernel) {
 INSTANTIATE_TEST_SUITE_P(Scenes, DiffuseRenderTest,
                          ::testing::Values("cbox/cbox-rgb.xml", "cornell-box/scene.xml", "veach-mis/scene.xml",
                                            "stiff/degenerate.xml", "stiff/furnace.xml", "stiff/inside_object.xml",
-                                           "stiff/rough_conductor.xml", "stiff/tiny_light.xml", "stiff/scaled.xml"),
+                                           "stiff/rough_conductor.xml", "stiff/tiny_light.xml", "stiff/scaled.xml",
+                                           "matpreview/matpreview.xml", "stiff/grazing.xml", "stiff/glass.xml",
+                                           "stiff/mirror.xml", "stiff/tir.xml"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string name = info.param.substr(0, info.param.find('.'));
                            for (char& c : name)
