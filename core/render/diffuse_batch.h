@@ -9,13 +9,15 @@
 // per cent of hits, scalar either way) and whole vertices on shapes it does
 // not shade (spheres, other BSDFs: kShapeScalar); a hit on a shape that
 // reflects nothing ends the path there, and the last ray under max_depth is
-// cast from the batch's own state, as cast_last_stream casts it. Next-event
-// estimation towards emitters other than triangle and sphere area lights
-// calls FrameScene's own sampling lane by lane.
+// cast from the batch's own state, as cast_last_stream casts it. The kernel
+// samples triangle and sphere area lights and environment maps, and adds an
+// environment map's radiance along rays that leave; next-event estimation
+// towards other emitters calls FrameScene's own sampling lane by lane.
 //
 // On cbox this made the path tracer's own code per ray about 1.9x faster
 // (docs/foundation.md, fifteenth round); on veach-mis, with conductors and
-// sphere lights, 1.33x faster renders (sixteenth round).
+// sphere lights, 1.33x faster renders (sixteenth round); on matpreview, with
+// its environment map, 1.13x (seventeenth round).
 #pragma once
 
 #include <string>

@@ -10,7 +10,8 @@
 //   FrameScene::interaction (a triangle of a mesh), Frame,
 //   sample_emitter -> FrameScene::sample_emitter_direction (triangle area
 //   emitters; sphere area emitters from outside: sphere_point_in_cone,
-//   sincos_turns, sphere_cone_pdf; others through view.sample_emitter),
+//   sincos_turns, sphere_cone_pdf; environment maps: sample_alias,
+//   uv_to_direction, envmap_lookup; others through view.sample_emitter),
 //   connect_emitter -> diffuse_eval_pdf or rough_conductor_eval_pdf
 //   (two-sided: mirror_to_front), mis_power, shadow_ray,
 //   draw_bsdf_numbers, sample_bsdf_drawn -> diffuse_sample,
@@ -18,6 +19,8 @@
 //   normals: BeckmannSlopeInversion, erfinv, with core/math/elementary.h's
 //   functions), bsdf.cpp's accept_sample, spawn_ray,
 //   russian_roulette_survival.
+// A second entry point, GDVR_ENVIRONMENT_KERNEL, is add_emission for rays
+// that left the scene, where the environment is a map (environment_along).
 // No multiply-add is fused (-ffp-contract=off for the whole build), so the
 // vector and scalar forms round alike; DiffuseBatchTest checks every kernel
 // against the scalar batch bit for bit.
