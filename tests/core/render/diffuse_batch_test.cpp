@@ -281,18 +281,22 @@ TEST(DiffuseBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
 // directional light (blocked by the walls: its
 // shadow rays are unbounded); a plastic cube and a diffuse sphere are shaded
 // by the scalar stages.
+// The camera of the rooms below, looking into a unit cube from near its
+// front wall.
+constexpr const char* kRoomCamera = R"(
+  <sensor type="perspective">
+    <float name="fov" value="80"/>
+    <transform name="to_world"><lookat origin="0, 0, -0.9" target="0, -0.2, 1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
+  </sensor>)";
+
 // Shapes of the glossy room.
 constexpr size_t kGlossyPanel = 1, kSphereLight = 7;
 std::unique_ptr<FrameScene> load_glossy_room(Scene* desc, bool animated = false) {
   const std::string conductor = R"(<string name="distribution" value="beckmann"/>
       <rgb name="specular_reflectance" value="0.9, 0.8, 0.6"/>
       <rgb name="eta" value="0.200438, 0.924033, 1.10221"/><rgb name="k" value="3.91295, 2.45285, 2.14219"/>)";
-  const std::string xml = R"(<scene version="3.0.0">
-  <sensor type="perspective">
-    <float name="fov" value="80"/>
-    <transform name="to_world"><lookat origin="0, 0, -0.9" target="0, -0.2, 1" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
-  </sensor>
+  const std::string xml = R"(<scene version="3.0.0">)" + std::string(kRoomCamera) + R"(
   <shape type="cube"><boolean name="flip_normals" value="true"/>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.6, 0.6, 0.5"/></bsdf></shape>
   <shape type="rectangle">
@@ -385,12 +389,7 @@ TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
 // them, after the light's emission.
 TEST(DiffuseBatchTest, ShapesThatReflectNothingEndPathsAsTheScalarBatchDoes) {
   Scene desc;
-  auto room = load_xml_scene(R"(<scene version="3.0.0">
-  <sensor type="perspective">
-    <float name="fov" value="80"/>
-    <transform name="to_world"><lookat origin="0, 0, -0.9" target="0, -0.2, 1" up="0, 1, 0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="20"/></film>
-  </sensor>
+  auto room = load_xml_scene(R"(<scene version="3.0.0">)" + std::string(kRoomCamera) + R"(
   <shape type="cube"><boolean name="flip_normals" value="true"/>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.6, 0.4"/></bsdf></shape>
   <shape type="rectangle">
