@@ -35,7 +35,6 @@ void load_path(const PathState& st, int i, DiffuseBatchState* s) {
   s->depth[i] = st.depth;
 }
 
-
 // Lane i's whole state back into its PathState, for the scalar stages.
 void store_path(const DiffuseBatchState& s, int i, PathState* st) {
   st->sampler.generator().restore(s.rng_state[i], s.rng_inc[i]);
@@ -251,7 +250,6 @@ void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettin
   int count = n;
   for (int i = 0; i < n; ++i) live[i] = i;
   PathState scratch;
-  const bool prefetch = scene.has_environment();
   // The batch's paths take their vertices in step (path_batch.cpp), so the
   // live ones share one depth.
   const int last = last_vertex_depth(settings);
@@ -262,15 +260,6 @@ void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettin
     for (int k = 0; k < count; ++k) {
       const int i = live[k];
       stream.set(k, lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]);
-    }
-    if (prefetch) {
-      // prefetch_for_next_vertex, as the scalar batch does before its casts:
-      // an environment map's tables, for the lanes' next emitter samples.
-      for (int k = 0; k < count; ++k) {
-        Sampler ahead;
-        ahead.generator().restore(s.rng_state[live[k]], s.rng_inc[live[k]]);
-        scene.prefetch_next_emitter_sample(ahead);
-      }
     }
     scene.accelerator().intersect_stream(stream, count, GeometrySet::kAll, coherence);
     int32_t escaped[kPathBatch];
