@@ -119,4 +119,10 @@ bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir
 bool bsdf_start_slope_inversion(const Bsdf& bsdf, Vec3f wo, float u_lobe, Vec2f u_dir, BeckmannSlopeInversion* inv);
 bool bsdf_sample_from_slope(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f slope11, BsdfSample* out);
 
+// Plastic's diffuse base for a diffuse reflectance R: R / (1 - Fdr), or with
+// `nonlinear` R / (1 - R Fdr), Fdr the internal diffuse Fresnel reflectance
+// (smooth plastic: fdr_int). plastic.cpp scales it by the Fresnel
+// transmittances; the vector path batch keeps it per triangle (diffuse_scene.cpp).
+Rgb plastic_diffuse_base(const Bsdf& b, Rgb reflectance, float internal_reflectance);
+
 }  // namespace gdvr

@@ -14,15 +14,21 @@
 #include "core/bsdf/fresnel.h"
 #include "core/bsdf/microfacet.h"
 
-namespace gdvr::lobes {
+namespace gdvr {
+
+Rgb plastic_diffuse_base(const Bsdf& b, Rgb reflectance, float internal_reflectance) {
+  Rgb denom =
+      b.nonlinear ? Rgb(1.0f) - reflectance * internal_reflectance : Rgb(1.0f - internal_reflectance);
+  return reflectance / denom;
+}
+
+namespace lobes {
 namespace {
 
 float relative_eta(const Bsdf& b) { return b.int_ior / b.ext_ior; }
 
 Rgb diffuse_base(const Bsdf& b, Vec2f uv, float internal_reflectance) {
-  Rgb diff = b.reflectance.eval(uv);
-  Rgb denom = b.nonlinear ? Rgb(1.0f) - diff * internal_reflectance : Rgb(1.0f - internal_reflectance);
-  return diff / denom;
+  return plastic_diffuse_base(b, b.reflectance.eval(uv), internal_reflectance);
 }
 
 // Mitsuba's lerp_gather over the table sampled at cos = i / (res - 1).
@@ -201,4 +207,5 @@ bool rough_plastic_sample_from_slope(const Bsdf& b, Vec2f uv, Vec3f wo, Vec2f sl
   return finish_rough_plastic_sample(b, uv, wo, reflect(wo, m), kLobeGlossyReflection, s);
 }
 
-}  // namespace gdvr::lobes
+}  // namespace lobes
+}  // namespace gdvr

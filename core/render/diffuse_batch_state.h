@@ -69,6 +69,9 @@ constexpr uint32_t kShapeScalar = 16;
 // and ends there, as the scalar stages would end it (they sample an emitter
 // and a direction for nothing), without shading the vertex.
 constexpr uint32_t kShapeReflectsNothing = 32;
+// Its BSDF is smooth plastic with constant reflectances (PlasticRecord;
+// the triangle records' albedo holds its diffuse base).
+constexpr uint32_t kShapePlastic = 64;
 
 // A rough conductor's parameters (Mitsuba's roughconductor, Beckmann,
 // visible normals), by shape id.
@@ -79,6 +82,18 @@ struct alignas(64) ConductorRecord {
   float unused[5];
 };
 static_assert(sizeof(ConductorRecord) == 64);
+
+// A smooth plastic's parameters (Mitsuba's plastic, plastic.cpp), by shape
+// id, as the scalar code computes them per call.
+struct alignas(64) PlasticRecord {
+  float eta;              // int_ior / ext_ior
+  float rcp_eta;          // 1 / eta
+  float inv_eta2;         // 1 / (eta eta)
+  float specular_weight;  // Bsdf::specular_sampling_weight
+  float specular[3];      // specular_reflectance (a constant)
+  float unused[9];
+};
+static_assert(sizeof(PlasticRecord) == 64);
 
 // A sphere area emitter, by emitter index (radius 0 for other emitters).
 struct alignas(64) SphereEmitterRecord {
@@ -135,6 +150,8 @@ struct DiffuseSceneView {
   const uint32_t* shape_flags = nullptr;      // shape id -> the kShape* bits above
   // shape id -> its conductor's parameters where kShapeConductor is set.
   const ConductorRecord* shape_conductor = nullptr;
+  // shape id -> its plastic's parameters where kShapePlastic is set.
+  const PlasticRecord* shape_plastic = nullptr;
   // shape id -> its reflectance where that is a texture (else null; the
   // record holds the constant).
   const Texture* const* shape_texture = nullptr;

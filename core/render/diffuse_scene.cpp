@@ -27,8 +27,9 @@ std::string shape_name(const Scene& scene, size_t i) {
 }
 
 // What the kernel can do with hits on shape i: kShapeConductor for a rough
-// Beckmann conductor sampled by visible normals, 0 for a diffuse BSDF (both
-// on triangle meshes), kShapeScalar for anything else.
+// Beckmann conductor sampled by visible normals, kShapePlastic for smooth
+// plastic with constant reflectances, 0 for a diffuse BSDF (all on triangle
+// meshes), kShapeScalar for anything else.
 uint32_t shading_kind(const Scene& scene, size_t i) {
   const Shape& shape = scene.shapes[i];
   if (shape.type != ShapeType::kMesh) return kShapeScalar;
@@ -39,6 +40,9 @@ uint32_t shading_kind(const Scene& scene, size_t i) {
       bsdf.sample_visible && bsdf.specular_reflectance.is_constant() && is_finite(bsdf.specular_reflectance.value) &&
       is_finite(bsdf.eta) && is_finite(bsdf.k))
     return kShapeConductor;
+  if (bsdf.type == BsdfType::kPlastic && bsdf.reflectance.is_constant() && is_finite(bsdf.reflectance.value) &&
+      bsdf.specular_reflectance.is_constant() && is_finite(bsdf.specular_reflectance.value))
+    return kShapePlastic;
   return kShapeScalar;
 }
 
@@ -81,7 +85,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
     triangle_count += fs.shapes_[i].mesh->triangle_count();
   }
   if (vector_shapes == 0)
-    return fail("no shape is a triangle mesh with a diffuse or a rough Beckmann conductor BSDF");
+    return fail("no shape is a triangle mesh with a diffuse, a rough Beckmann conductor or a smooth plastic BSDF");
   if (triangle_count > kMaxTriangles)
     return fail("the scene has " + std::to_string(triangle_count) + " triangles (records are built for at most " +
                 std::to_string(kMaxTriangles) + ")");
@@ -92,6 +96,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
   ds->shape_flags_.assign(scene.shapes.size(), 0);
   ds->shape_texture_.assign(scene.shapes.size(), nullptr);
   ds->shape_conductor_.assign(scene.shapes.size(), ConductorRecord{});
+  ds->shape_plastic_.assign(scene.shapes.size(), PlasticRecord{});
   uint32_t first = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
     const uint32_t kind = shading_kind(scene, i);
@@ -114,6 +119,15 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
       put3(c.eta, bsdf.eta);
       put3(c.k, bsdf.k);
       put3(c.specular, bsdf.specular_reflectance.value);
+    }
+    if (kind == kShapePlastic) {
+      // As plastic.cpp computes them per call.
+      PlasticRecord& pr = ds->shape_plastic_[i];
+      pr.eta = bsdf.int_ior / bsdf.ext_ior;
+      pr.rcp_eta = 1.0f / pr.eta;
+      pr.inv_eta2 = 1.0f / (pr.eta * pr.eta);
+      pr.specular_weight = bsdf.specular_sampling_weight;
+      put3(pr.specular, bsdf.specular_reflectance.value);
     }
     if (fs.shapes_[i].instanced) ds->animated_shapes_.push_back(i);
     if (!ds->bake_shape(fs, i, why_not)) return nullptr;
@@ -138,11 +152,13 @@ bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_n
   const FrameScene::ShapeState& s = fs.shapes_[i];
   // World space for a static shape; object space (placed by to_world) for an animated one.
   const TriangleMesh& m = *s.mesh;
-  const Texture& reflectance = scene.bsdfs[size_t(shape.bsdf)].reflectance;
+  const Bsdf& bsdf = scene.bsdfs[size_t(shape.bsdf)];
   const bool textured = (shape_flags_[i] & kShapeTextured) != 0;
-  // A conductor's record carries no reflectance (ConductorRecord has its parameters).
-  const bool diffuse = (shape_flags_[i] & kShapeConductor) == 0;
-  const Rgb albedo = textured || !diffuse ? Rgb(0.0f) : reflectance.value;
+  // A diffuse triangle's record holds its constant reflectance, a plastic
+  // one's its diffuse base; a conductor's none (ConductorRecord has its parameters).
+  Rgb albedo(0.0f);
+  if (shape_flags_[i] & kShapePlastic) albedo = plastic_diffuse_base(bsdf, bsdf.reflectance.value, bsdf.fdr_int);
+  else if (!textured && !(shape_flags_[i] & kShapeConductor)) albedo = bsdf.reflectance.value;
   for (size_t t = 0; t < m.triangle_count(); ++t) {
     Vec3f p0 = m.positions[m.indices[3 * t]], p1 = m.positions[m.indices[3 * t + 1]],
           p2 = m.positions[m.indices[3 * t + 2]];
@@ -265,6 +281,7 @@ void DiffuseScene::update_view() {
   view_.shape_flags = shape_flags_.data();
   view_.shape_texture = shape_texture_.data();
   view_.shape_conductor = shape_conductor_.data();
+  view_.shape_plastic = shape_plastic_.data();
   view_.emitter_triangles = emitter_triangles_.empty() ? nullptr : emitter_triangles_.data();
   view_.sample_emitter = sample_emitter_lane;
   view_.emitter_spheres = emitter_spheres_.empty() ? nullptr : emitter_spheres_.data();
@@ -281,6 +298,7 @@ size_t DiffuseScene::memory_bytes() const {
   return triangles_.size() * sizeof(DiffuseTriangleRecord) + shading_.size() * sizeof(ShadingRecord) +
          emitter_triangles_.size() * sizeof(EmitterTriangleRecord) +
          shape_conductor_.size() * sizeof(ConductorRecord) +
+         shape_plastic_.size() * sizeof(PlasticRecord) +
          emitter_spheres_.size() * sizeof(SphereEmitterRecord) +
          (shape_first_.size() + shape_flags_.size() + emitter_first_.size()) * sizeof(uint32_t) +
          shape_texture_.size() * sizeof(const Texture*) +

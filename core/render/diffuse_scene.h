@@ -1,16 +1,18 @@
 // A scene laid out for the vector path batch's kernel (diffuse_batch.h):
 // one 64-byte record per triangle of every mesh whose BSDF the kernel
 // shades (diffuse, one- or two-sided, constant or textured reflectance; rough
-// Beckmann conductors sampled by visible normals, with their parameters per
-// shape), instead of the index buffer, three corners and four per-triangle
-// tables that a vertex otherwise reads. Other shapes are flagged for the
-// scalar stages (kShapeScalar). Emitters: triangle records where every
-// emitter is a flat-shaded area light on a mesh; sphere records for sphere
-// area lights; FrameScene's sampling for the rest.
+// Beckmann conductors sampled by visible normals and smooth plastic with
+// constant reflectances, with their parameters per shape), instead of the
+// index buffer, three corners and four per-triangle tables that a vertex
+// otherwise reads. Other shapes are flagged for the scalar stages
+// (kShapeScalar). Emitters: triangle records where every emitter is a
+// flat-shaded area light on a mesh; sphere records for sphere area lights;
+// the environment map's tables (FrameScene's own); FrameScene's sampling for
+// the rest.
 //
-// FrameScene builds it where the scene allows (an emitter, none of them an
-// environment, and at least one shape the kernel shades) and says why not
-// elsewhere; everything else keeps the general path tracer.
+// FrameScene builds it where the scene allows (an emitter and at least one
+// shape the kernel shades) and says why not elsewhere; everything else
+// keeps the general path tracer.
 #pragma once
 
 #include <memory>
@@ -53,6 +55,7 @@ class DiffuseScene {
   std::vector<uint32_t> shape_flags_;
   std::vector<const Texture*> shape_texture_;
   std::vector<ConductorRecord> shape_conductor_;
+  std::vector<PlasticRecord> shape_plastic_;
   std::vector<size_t> animated_shapes_;
   std::vector<EmitterTriangleRecord> emitter_triangles_;
   std::vector<SphereEmitterRecord> emitter_spheres_;  // empty without sphere emitters

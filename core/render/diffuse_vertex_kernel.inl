@@ -12,12 +12,13 @@
 //   emitters; sphere area emitters from outside: sphere_point_in_cone,
 //   sincos_turns, sphere_cone_pdf; environment maps: sample_alias,
 //   uv_to_direction, envmap_lookup; others through view.sample_emitter),
-//   connect_emitter -> diffuse_eval_pdf or rough_conductor_eval_pdf
-//   (two-sided: mirror_to_front), mis_power, shadow_ray,
+//   connect_emitter -> diffuse_eval_pdf, rough_conductor_eval_pdf or
+//   plastic_eval_pdf (two-sided: mirror_to_front), mis_power, shadow_ray,
 //   draw_bsdf_numbers, sample_bsdf_drawn -> diffuse_sample,
-//   square_to_cosine_hemisphere or rough_conductor_sample (Beckmann visible
+//   square_to_cosine_hemisphere, rough_conductor_sample (Beckmann visible
 //   normals: BeckmannSlopeInversion, erfinv, with core/math/elementary.h's
-//   functions), bsdf.cpp's accept_sample, spawn_ray,
+//   functions) or plastic_sample (fresnel_dielectric, its Dirac lobe
+//   included), bsdf.cpp's accept_sample, spawn_ray,
 //   russian_roulette_survival.
 // A second entry point, GDVR_ENVIRONMENT_KERNEL, is add_emission for rays
 // that left the scene, where the environment is a map (environment_along).
@@ -580,6 +581,61 @@ struct VConductor {
   }
 };
 
+// fresnel_dielectric(cos_theta_i, eta).f (fresnel.h); rcp_eta = 1 / eta.
+inline vf vfresnel_dielectric(vf cos_theta_i, vf eta, vf rcp_eta) {
+  const vi outside = cos_theta_i >= 0.0f;
+  const vf eta_it = vsel(outside, eta, rcp_eta), eta_ti = vsel(outside, rcp_eta, eta);
+  const vf cos_theta_t_sqr = 1.0f - (1.0f - cos_theta_i * cos_theta_i) * (eta_ti * eta_ti);
+  const vf ci = vabs(cos_theta_i);
+  const vf ct = safe_vsqrt(cos_theta_t_sqr);
+  const vf a_s = (ci - eta_it * ct) / (ci + eta_it * ct);
+  const vf a_p = (ct - eta_it * ci) / (ct + eta_it * ci);
+  const vf f = 0.5f * (a_s * a_s + a_p * a_p);
+  return vsel(eta == 1.0f, splat(0.0f), vsel(ci == 0.0f, splat(1.0f), f));
+}
+
+// Smooth plastic (plastic.cpp) on eight lanes, on the front side. `base`:
+// the diffuse base (the triangle record's albedo); f_o: the Fresnel
+// reflectance of wo, which a vertex's emitter connection and its sample share.
+struct VPlastic {
+  vf eta, rcp_eta, inv_eta2, specular_weight;
+  V3 specular;
+
+  vf fresnel(vf cos_theta) const { return vfresnel_dielectric(cos_theta, eta, rcp_eta); }
+  // plastic_eval_pdf: the value (zero where the scalar code returns {}) and the pdf.
+  void eval_pdf(V3 base, vf wo_z, vf f_o, vf wi_z, V3* value, vf* pdf) const {
+    const vf f_i = fresnel(wi_z);
+    const vf cos_pdf = kInvPi * wi_z;
+    const vf prob_specular = f_o * specular_weight, prob_diffuse = (1.0f - f_o) * (1.0f - specular_weight);
+    const vi valid = ~(wo_z <= 0.0f) & ~(wi_z <= 0.0f);
+    const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
+    *value = vsel3(valid, base * (cos_pdf * inv_eta2 * (1.0f - f_o) * (1.0f - f_i)), zero);
+    *pdf = vsel(valid, cos_pdf * prob_diffuse / (prob_specular + prob_diffuse), splat(0.0f));
+  }
+  // plastic_sample with bsdf_sample's acceptance, the diffuse lobe's
+  // direction (square_to_cosine_hemisphere) given: where `ok`, the
+  // direction, weight and pdf; *delta where the Dirac lobe was chosen.
+  vi sample(V3 base, V3 wo, vf f_o, vf u_lobe, V3 wi_diffuse, V3* wi_out, V3* weight, vf* pdf_out,
+            vi* delta) const {
+    vf prob_specular = f_o * specular_weight, prob_diffuse = (1.0f - f_o) * (1.0f - specular_weight);
+    prob_specular = prob_specular / (prob_specular + prob_diffuse);
+    prob_diffuse = 1.0f - prob_specular;
+    const vi specular_lobe = u_lobe < prob_specular;
+    const vf pdf_diffuse = prob_diffuse * (kInvPi * wi_diffuse.z);
+    const vf f_i = fresnel(wi_diffuse.z);
+    const V3 weight_diffuse = base * (inv_eta2 * (1.0f - f_o) * (1.0f - f_i) / prob_diffuse);
+    *wi_out = vsel3(specular_lobe, V3{-wo.x, -wo.y, wo.z}, wi_diffuse);  // reflect_local
+    *pdf_out = vsel(specular_lobe, prob_specular, pdf_diffuse);
+    *weight = vsel3(specular_lobe, specular * (f_o / prob_specular), weight_diffuse);
+    *delta = specular_lobe;
+    vi ok = ~(wo.z <= 0.0f) & (specular_lobe | (pdf_diffuse > 0.0f));
+    // accept_sample (bsdf.cpp)
+    ok &= finite(weight->x) & finite(weight->y) & finite(weight->z) & finite(*pdf_out) & (*pdf_out > 0.0f) &
+          finite(wi_out->x) & finite(wi_out->y) & finite(wi_out->z);
+    return ok;
+  }
+};
+
 // atan2_turns (arctan.h).
 inline vf vatan2_turns(vf y, vf x) {
   const vf sum = x + y;
@@ -747,8 +803,11 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   // (si.wi, mirrored to the front).
   const vi conductor = shade & ((flags & kShapeConductor) != 0u);
   const bool any_conductor = !_mm256_testz_si256((__m256i)conductor, (__m256i)conductor);
+  const vi plastic = shade & ((flags & kShapePlastic) != 0u);
+  const bool any_plastic = !_mm256_testz_si256((__m256i)plastic, (__m256i)plastic);
+  const V3 wo_local =
+      any_conductor || any_plastic ? V3{vdot(wo_world, fs), vdot(wo_world, ft), wo_front_z} : V3{};
   VConductor cond{};
-  V3 wo_local{};
   vf g1_wo{};
   if (any_conductor) {
     uint32_t shape_lanes[kLanes];
@@ -759,8 +818,21 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
     cond.eta = V3{c.f[2], c.f[3], c.f[4]};
     cond.k = V3{c.f[5], c.f[6], c.f[7]};
     cond.specular = V3{c.f[8], c.f[9], c.f[10]};
-    wo_local = V3{vdot(wo_world, fs), vdot(wo_world, ft), wo_front_z};
     g1_wo = cond.g1_of(wo_local);
+  }
+  // Lanes on smooth plastic: its parameters, and the Fresnel reflectance of wo.
+  VPlastic plas{};
+  vf f_o{};
+  if (any_plastic) {
+    uint32_t shape_lanes[kLanes];
+    for (int i = 0; i < kLanes; ++i) shape_lanes[i] = plastic[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
+    const RecordLanes c = load_records(scene.shape_plastic, shape_lanes);
+    plas.eta = c.f[0];
+    plas.rcp_eta = c.f[1];
+    plas.inv_eta2 = c.f[2];
+    plas.specular_weight = c.f[3];
+    plas.specular = V3{c.f[4], c.f[5], c.f[6]};
+    f_o = plas.fresnel(wo_front_z);
   }
 
   // ---- sample_emitter ----
@@ -900,7 +972,14 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
     f = vsel3(conductor, fc, f);
     bsdf_pdf = vsel(conductor, pc, bsdf_pdf);
   }
-  const vi lit = shade & sampled & ~is_black(weight) & (conductor | diffuse_lit);
+  if (any_plastic) {
+    V3 fp;
+    vf pp;
+    plas.eval_pdf(albedo, wo_front_z, f_o, wl_z, &fp, &pp);
+    f = vsel3(plastic, fp, f);
+    bsdf_pdf = vsel(plastic, pp, bsdf_pdf);
+  }
+  const vi lit = shade & sampled & ~is_black(weight) & (conductor | plastic | diffuse_lit);
   const vi connect = lit & ~is_black(f);
   const vf w = vsel(delta, splat(1.0f), mis_power(es_pdf, bsdf_pdf));
   store3(st->shadow_contribution, k, throughput * f * weight * w, connect);
@@ -910,12 +989,24 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   store1(st->shadow_pending, k, connect, shade);
 
   // ---- draw_bsdf_numbers, then sample_bsdf_drawn ----
-  (void)rng.next_float(shade);  // u_lobe: one lobe
+  const vf u_lobe = rng.next_float(shade);  // read by plastic alone (one lobe elsewhere)
   const vf vx = rng.next_float(shade), vy = rng.next_float(shade);
   V3 wi = cosine_hemisphere(vx, vy);
   vf pdf = kInvPi * wi.z;
-  vi alive = shade & ~conductor & ~(wo_front_z <= 0.0f) & (pdf > 0.0f) & ~is_black(albedo);
+  vi alive = shade & ~conductor & ~plastic & ~(wo_front_z <= 0.0f) & (pdf > 0.0f) & ~is_black(albedo);
   V3 bsdf_weight = albedo;
+  vi delta_lobe = vi{};
+  if (any_plastic) {
+    V3 wi_p, weight_p;
+    vf pdf_p;
+    vi delta_p;
+    const vi ok = plas.sample(albedo, wo_local, f_o, u_lobe, wi, &wi_p, &weight_p, &pdf_p, &delta_p);
+    alive |= plastic & ok & ~is_black(weight_p);
+    wi = vsel3(plastic, wi_p, wi);
+    bsdf_weight = vsel3(plastic, weight_p, bsdf_weight);
+    pdf = vsel(plastic, pdf_p, pdf);
+    delta_lobe = plastic & delta_p;
+  }
   if (any_conductor) {
     V3 wi_c, weight_c;
     vf pdf_c;
@@ -933,7 +1024,7 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   store1(st->tmax, k, splat(kInfinity), alive);
   store3(st->prev_p, k, p, alive);
   store1(st->prev_pdf, k, pdf, alive);
-  store1(st->prev_delta, k, vi{}, alive);
+  store1(st->prev_delta, k, delta_lobe, alive);
   // Russian roulette (the kernel's BSDFs leave eta as it is).
   const vf throughput_max = vmax(throughput.x, vmax(throughput.y, throughput.z));
   alive &= throughput_max > 0.0f;

@@ -101,14 +101,15 @@ std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
   return load_xml_scene(xml, dir.string(), desc, {kFan, kRedPanel});
 }
 
-// A plastic cube and a sphere light: nothing the kernel shades.
+// A plastic cube whose diffuse reflectance is a texture and a sphere light:
+// nothing the kernel shades.
 std::unique_ptr<FrameScene> load_scene_without_records(Scene* desc) {
   return load_xml_scene(R"(<scene version="3.0.0">
     <sensor type="perspective">
       <transform name="to_world"><lookat origin="0, 0, -4" target="0, 0, 0" up="0, 1, 0"/></transform>
       <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
     </sensor>
-    <shape type="cube"><bsdf type="plastic"/></shape>
+    <shape type="cube"><bsdf type="plastic"><texture type="checkerboard" name="diffuse_reflectance"/></bsdf></shape>
     <shape type="sphere"><point name="center" x="1" y="1.5" z="-1.5"/><float name="radius" value="0.3"/>
       <emitter type="area"><rgb name="radiance" value="10, 10, 10"/></emitter></shape>
     <emitter type="constant"><rgb name="radiance" value="0.5, 0.5, 0.5"/></emitter>
@@ -139,15 +140,22 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   }
   EXPECT_EQ(conductors, 4);
   EXPECT_EQ(scalar, 3);  // the three sphere lights
-  // The environment is looked up along rays that leave, and sampled by
-  // FrameScene; the plastic shape takes the scalar stages.
+  // The environment is looked up along rays that leave and sampled, and the
+  // plastic shape shaded, all by the kernel.
   auto matpreview = load_test_scene("matpreview", kW, kH);
   ASSERT_TRUE(matpreview);
   ASSERT_NE(matpreview->scene->diffuse_scene(), nullptr) << matpreview->scene->why_not_diffuse();
   const DiffuseSceneView& mv = matpreview->scene->diffuse_scene()->view();
   EXPECT_NE(mv.shape_flags[0] & kShapeTextured, 0u);  // the checkerboard floor
   EXPECT_EQ(mv.shape_flags[1] & ~kShapeHasUvs, 0u);   // the diffuse interior
-  EXPECT_EQ(mv.shape_flags[2], kShapeScalar);          // the plastic exterior
+  EXPECT_EQ(mv.shape_flags[2] & ~kShapeHasUvs, kShapePlastic);  // the plastic exterior
+  EXPECT_NE(mv.envmap, nullptr);
+  EXPECT_FLOAT_EQ(mv.shape_plastic[2].eta, 1.9f / 1.000277f);
+  EXPECT_EQ(mv.shape_plastic[2].specular[0], 1.0f);
+  // Its records hold the diffuse base R / (1 - Fdr_int), not R.
+  const DiffuseTriangleRecord& plastic_tri = mv.triangles[mv.shape_first[2]];
+  EXPECT_GT(plastic_tri.albedo[0], 0.940f);
+  EXPECT_FLOAT_EQ(plastic_tri.albedo[0] / plastic_tri.albedo[1], 0.940f / 0.271f);
   // Nothing for the kernel to shade: the scalar batch renders it.
   Scene none_desc;
   auto none = load_scene_without_records(&none_desc);
@@ -279,8 +287,8 @@ TEST(DiffuseBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
 // enough to the ceiling that its cone is sampled in double there), a
 // flipped one (dark from outside), a point light, a spot light and a
 // directional light (blocked by the walls: its
-// shadow rays are unbounded); a plastic cube and a diffuse sphere are shaded
-// by the scalar stages.
+// shadow rays are unbounded); a plastic cube (the kernel's) and a diffuse
+// sphere (the scalar stages').
 // The camera of the rooms below, looking into a unit cube from near its
 // front wall.
 constexpr const char* kRoomCamera = R"(
@@ -375,7 +383,8 @@ TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
   const DiffuseSceneView& view = room->diffuse_scene()->view();
   EXPECT_EQ(view.emitter_triangles, nullptr);
   for (size_t i : {1, 2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapeConductor, 0u) << "shape " << i;
-  for (size_t i : {5, 6, 7, 8}) EXPECT_NE(view.shape_flags[i] & kShapeScalar, 0u) << "shape " << i;
+  EXPECT_NE(view.shape_flags[5] & kShapePlastic, 0u);
+  for (size_t i : {6, 7, 8}) EXPECT_NE(view.shape_flags[i] & kShapeScalar, 0u) << "shape " << i;
   ASSERT_NE(view.emitter_spheres, nullptr);
   EXPECT_EQ(view.emitter_spheres[1].flip, -1.0f);
   EXPECT_EQ(view.shape_conductor[4].alpha_u, 0.6f);
@@ -420,14 +429,14 @@ TEST(DiffuseBatchTest, ShapesThatReflectNothingEndPathsAsTheScalarBatchDoes) {
 
 // matpreview: an environment map seen along rays that leave (and at last
 // rays) and sampled, both by the kernel; a checkerboard floor; the plastic
-// shape by the scalar stages.
+// shape, shaded by the kernel.
 TEST(DiffuseBatchTest, MatpreviewPathsMatchTheScalarBatchBitForBit) {
   expect_bundled_scene_same_as_scalar_batch("matpreview");
 }
 
 // An open yard under a constant sky: a diffuse floor, a rough conductor
-// panel, a plastic cube (scalar stages), a black rectangle light and a black
-// sphere that reflect nothing (the path ends there).
+// panel, a plastic cube, a black rectangle light and a black sphere that
+// reflect nothing (the path ends there).
 TEST(DiffuseBatchTest, OpenYardUnderConstantSkyMatchesTheScalarBatchBitForBit) {
   Scene desc;
   auto yard = load_xml_scene(R"(<scene version="3.0.0">
@@ -461,6 +470,50 @@ TEST(DiffuseBatchTest, OpenYardUnderConstantSkyMatchesTheScalarBatchBitForBit) {
   EXPECT_EQ(view.shape_flags[4], kShapeScalar | kShapeReflectsNothing);  // the black sphere
   if (!diffuse_batch_available(*yard)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*yard, v, kW, kH);
+}
+
+// Smooth plastics in a room lit by a rectangle light and a constant sky
+// through an open side: one-sided and two-sided, nonlinear, a coloured
+// specular reflectance, an index-matched coating (eta 1: no Fresnel
+// reflection, never the Dirac lobe), a coating denser outside than in
+// (eta < 1), and a textured one that the scalar stages shade.
+TEST(DiffuseBatchTest, PlasticRoomMatchesTheScalarBatchBitForBit) {
+  Scene desc;
+  auto room = load_xml_scene(R"(<scene version="3.0.0">)" + std::string(kRoomCamera) + R"(
+  <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><translate y="-1"/></transform>
+    <bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.5, 0.6, 0.4"/><float name="int_ior" value="1.7"/></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><translate z="1"/></transform>
+    <bsdf type="twosided"><bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.2, 0.3, 0.8"/>
+      <boolean name="nonlinear" value="true"/></bsdf></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="90"/><translate x="-1"/></transform>
+    <bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.7, 0.7, 0.7"/>
+      <rgb name="specular_reflectance" value="0.9, 0.5, 0.2"/></bsdf></shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.2"/><rotate y="1" angle="30"/><translate x="0.3" y="-0.8" z="0.4"/></transform>
+    <bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.8, 0.2, 0.2"/>
+      <float name="int_ior" value="1.333"/><float name="ext_ior" value="1.333"/></bsdf></shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.15"/><translate x="-0.4" y="-0.85" z="0.3"/></transform>
+    <bsdf type="twosided"><bsdf type="plastic"><rgb name="diffuse_reflectance" value="0.3, 0.8, 0.3"/>
+      <float name="int_ior" value="1.2"/><float name="ext_ior" value="1.6"/></bsdf></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="0.25"/><rotate x="1" angle="60"/><translate x="-0.1" y="-0.4" z="0.7"/></transform>
+    <bsdf type="plastic"><texture type="checkerboard" name="diffuse_reflectance"/></bsdf></shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.3"/><rotate x="1" angle="90"/><translate x="0.1" y="0.98" z="0.3"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
+    <emitter type="area"><rgb name="radiance" value="8, 8, 6"/></emitter>
+  </shape>
+  <emitter type="constant"><rgb name="radiance" value="0.4, 0.5, 0.7"/></emitter>
+</scene>)", std::filesystem::temp_directory_path().string(), &desc, {});
+  ASSERT_TRUE(room);
+  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  const DiffuseSceneView& view = room->diffuse_scene()->view();
+  for (size_t i : {0, 1, 2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapePlastic, 0u) << "shape " << i;
+  EXPECT_NE(view.shape_flags[1] & kShapeTwoSided, 0u);
+  EXPECT_EQ(view.shape_flags[5], kShapeScalar);  // the textured plastic
+  EXPECT_EQ(view.shape_plastic[3].eta, 1.0f);
+  EXPECT_LT(view.shape_plastic[4].eta, 1.0f);
+  EXPECT_EQ(view.shape_plastic[2].specular[2], 0.2f);
+  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
 TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
