@@ -285,6 +285,12 @@ void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettin
         scalar_shaded[i] = -1;
         continue;
       }
+      // The kernel reads the triangle's records after the other hits and the
+      // rays that left: asked for now, they arrive meanwhile (matpreview's
+      // mesh does not fit the cache).
+      const uint32_t record = view.shape_first[hit.id] + hit.prim;
+      __builtin_prefetch(&view.triangles[record]);
+      if (view.shading) __builtin_prefetch(&view.shading[record]);
       s.hit_shape[i] = hit.id;
       s.hit_prim[i] = int32_t(hit.prim);
       s.hit_u[i] = hit.u;
