@@ -1,7 +1,7 @@
 // The path batch (path_batch.h) for a scene that FrameScene laid out as
 // records (diffuse_scene.h): the paths' state as struct of arrays, each
-// vertex on a diffuse or rough Beckmann conductor triangle shaded eight
-// paths at a time by an AVX2 or AVX-512 kernel (diffuse_vertex_kernel.inl;
+// vertex on a diffuse, rough Beckmann conductor or smooth plastic triangle
+// shaded eight paths at a time by an AVX2 or AVX-512 kernel (diffuse_vertex_kernel.inl;
 // "diffuse" for the BSDF it began with), the rays cast as the scalar batch
 // casts them. Every path's radiance is the scalar batch's bit for bit, so an
 // image does not depend on which CPU rendered it. Lanes take the scalar
@@ -17,7 +17,8 @@
 // On cbox this made the path tracer's own code per ray about 1.9x faster
 // (docs/foundation.md, fifteenth round); on veach-mis, with conductors and
 // sphere lights, 1.33x faster renders (sixteenth round); on matpreview, with
-// its environment map, 1.13x (seventeenth round).
+// its environment map, 1.13x (seventeenth round), and with its plastic
+// shape 1.115x more (eighteenth round).
 #pragma once
 
 #include <string>
