@@ -72,6 +72,9 @@ constexpr uint32_t kShapeReflectsNothing = 32;
 // Its BSDF is smooth plastic with constant reflectances (PlasticRecord;
 // the triangle records' albedo holds its diffuse base).
 constexpr uint32_t kShapePlastic = 64;
+// Its textured reflectance is a checkerboard (CheckerboardRecord), which
+// the kernel evaluates itself; other textures are called lane by lane.
+constexpr uint32_t kShapeCheckerboard = 128;
 
 // A rough conductor's parameters (Mitsuba's roughconductor, Beckmann,
 // visible normals), by shape id.
@@ -94,6 +97,15 @@ struct alignas(64) PlasticRecord {
   float unused[9];
 };
 static_assert(sizeof(PlasticRecord) == 64);
+
+// A checkerboard reflectance (Texture::eval_varying), by shape id: its uv
+// transform and its two colours.
+struct alignas(64) CheckerboardRecord {
+  float a, b, c, d, e, f;  // UvTransform
+  float color0[3], color1[3];
+  float unused[4];
+};
+static_assert(sizeof(CheckerboardRecord) == 64);
 
 // A sphere area emitter, by emitter index (radius 0 for other emitters).
 struct alignas(64) SphereEmitterRecord {
@@ -155,6 +167,8 @@ struct DiffuseSceneView {
   // shape id -> its reflectance where that is a texture (else null; the
   // record holds the constant).
   const Texture* const* shape_texture = nullptr;
+  // shape id -> its checkerboard where kShapeCheckerboard is set.
+  const CheckerboardRecord* shape_checkerboard = nullptr;
   // Null unless every emitter is an area emitter on a flat-shaded mesh;
   // next-event estimation then calls sample_emitter lane by lane.
   const EmitterTriangleRecord* emitter_triangles = nullptr;

@@ -95,6 +95,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
   ds->shape_first_.assign(scene.shapes.size(), 0);
   ds->shape_flags_.assign(scene.shapes.size(), 0);
   ds->shape_texture_.assign(scene.shapes.size(), nullptr);
+  ds->shape_checkerboard_.assign(scene.shapes.size(), CheckerboardRecord{});
   ds->shape_conductor_.assign(scene.shapes.size(), ConductorRecord{});
   ds->shape_plastic_.assign(scene.shapes.size(), PlasticRecord{});
   uint32_t first = 0;
@@ -111,6 +112,14 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
     ds->shape_flags_[i] = kind | (bsdf.two_sided ? kShapeTwoSided : 0u) | (textured ? kShapeTextured : 0u) |
                           (fs.shapes_[i].mesh->uvs.empty() ? 0u : kShapeHasUvs) | reflects_nothing(scene, i);
     ds->shape_texture_[i] = textured ? &bsdf.reflectance : nullptr;
+    if (textured && bsdf.reflectance.type == TextureType::kCheckerboard) {
+      const Texture& t = bsdf.reflectance;
+      CheckerboardRecord& r = ds->shape_checkerboard_[i];
+      r.a = t.to_uv.a, r.b = t.to_uv.b, r.c = t.to_uv.c, r.d = t.to_uv.d, r.e = t.to_uv.e, r.f = t.to_uv.f;
+      put3(r.color0, t.color0);
+      put3(r.color1, t.color1);
+      ds->shape_flags_[i] |= kShapeCheckerboard;
+    }
     if (kind == kShapeConductor) {
       // As MicrofacetDistribution's constructor clamps them.
       ConductorRecord& c = ds->shape_conductor_[i];
@@ -280,6 +289,7 @@ void DiffuseScene::update_view() {
   view_.shape_first = shape_first_.data();
   view_.shape_flags = shape_flags_.data();
   view_.shape_texture = shape_texture_.data();
+  view_.shape_checkerboard = shape_checkerboard_.data();
   view_.shape_conductor = shape_conductor_.data();
   view_.shape_plastic = shape_plastic_.data();
   view_.emitter_triangles = emitter_triangles_.empty() ? nullptr : emitter_triangles_.data();
@@ -302,6 +312,7 @@ size_t DiffuseScene::memory_bytes() const {
          emitter_spheres_.size() * sizeof(SphereEmitterRecord) +
          (shape_first_.size() + shape_flags_.size() + emitter_first_.size()) * sizeof(uint32_t) +
          shape_texture_.size() * sizeof(const Texture*) +
+         shape_checkerboard_.size() * sizeof(CheckerboardRecord) +
          emitter_choice_.size() * sizeof(const Distribution1D*);
 }
 

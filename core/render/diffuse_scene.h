@@ -54,6 +54,7 @@ class DiffuseScene {
   std::vector<uint32_t> shape_first_;
   std::vector<uint32_t> shape_flags_;
   std::vector<const Texture*> shape_texture_;
+  std::vector<CheckerboardRecord> shape_checkerboard_;
   std::vector<ConductorRecord> shape_conductor_;
   std::vector<PlasticRecord> shape_plastic_;
   std::vector<size_t> animated_shapes_;

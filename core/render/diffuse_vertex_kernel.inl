@@ -67,6 +67,8 @@ inline vf vmax(vf a, vf b) { return a < b ? b : a; }
 inline vf vmin(vf a, vf b) { return b < a ? b : a; }
 inline vf vsel(vi m, vf a, vf b) { return m ? a : b; }
 inline vi finite(vf x) { return vabs(x) <= kFloatMax; }
+// std::floor.
+inline vf vfloor(vf x) { return (vf)_mm256_round_ps((__m256)x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC); }
 
 struct V3 {
   vf x, y, z;
@@ -767,23 +769,38 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
       ns = vsel3(smooth & ok, interp * sr.f[9], n);
     }
     // A textured reflectance at the hit's uv (the mesh's, interpolated, or
-    // the barycentrics), evaluated lane by lane.
+    // the barycentrics): a checkerboard here (Texture::eval_varying's
+    // arithmetic), other textures by eval_varying lane by lane.
     if (!_mm256_testz_si256((__m256i)textured, (__m256i)textured)) {
       const vi has_uvs = (flags & kShapeHasUvs) != 0u;
       const vf u = vsel(has_uvs, sr.f[10] * b0 + sr.f[12] * b1 + sr.f[14] * b2, b1);
       const vf v = vsel(has_uvs, sr.f[11] * b0 + sr.f[13] * b1 + sr.f[15] * b2, b2);
-      alignas(32) float r[kLanes], g[kLanes], bl[kLanes];
-      for (int i = 0; i < kLanes; ++i) {
-        r[i] = g[i] = bl[i] = 0.0f;
-        if (!textured[i]) continue;
-        const Texture* texture = scene.shape_texture[st->hit_shape[k + i]];
-        Vec2f uv;  // field by field: Vec2f's constructor is gdvr inline code
-        uv.x = u[i];
-        uv.y = v[i];
-        const Rgb c = texture->eval_varying(uv);
-        r[i] = c.r, g[i] = c.g, bl[i] = c.b;
+      const vi checker = textured & ((flags & kShapeCheckerboard) != 0u);
+      const vi other = textured & ~checker;
+      V3 texture_value{splat(0.0f), splat(0.0f), splat(0.0f)};
+      if (!_mm256_testz_si256((__m256i)checker, (__m256i)checker)) {
+        uint32_t shape_lanes[kLanes];
+        for (int i = 0; i < kLanes; ++i) shape_lanes[i] = checker[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
+        const RecordLanes c = load_records(scene.shape_checkerboard, shape_lanes);
+        const vf tu = c.f[0] * u + c.f[1] * v + c.f[2], tv = c.f[3] * u + c.f[4] * v + c.f[5];  // UvTransform
+        const vi mx = tu - vfloor(tu) > 0.5f, my = tv - vfloor(tv) > 0.5f;
+        texture_value = vsel3(mx == my, V3{c.f[6], c.f[7], c.f[8]}, V3{c.f[9], c.f[10], c.f[11]});
       }
-      albedo = vsel3(textured, V3{load<vf>(r), load<vf>(g), load<vf>(bl)}, albedo);
+      if (!_mm256_testz_si256((__m256i)other, (__m256i)other)) {
+        alignas(32) float r[kLanes], g[kLanes], bl[kLanes];
+        for (int i = 0; i < kLanes; ++i) {
+          r[i] = g[i] = bl[i] = 0.0f;
+          if (!other[i]) continue;
+          const Texture* texture = scene.shape_texture[st->hit_shape[k + i]];
+          Vec2f uv;  // field by field: Vec2f's constructor is gdvr inline code
+          uv.x = u[i];
+          uv.y = v[i];
+          const Rgb c = texture->eval_varying(uv);
+          r[i] = c.r, g[i] = c.g, bl[i] = c.b;
+        }
+        texture_value = vsel3(other, V3{load<vf>(r), load<vf>(g), load<vf>(bl)}, texture_value);
+      }
+      albedo = vsel3(textured, texture_value, albedo);
     }
   }
   // Frame(ns) (Duff et al.).

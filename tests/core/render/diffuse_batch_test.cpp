@@ -53,7 +53,8 @@ std::unique_ptr<FrameScene> load_xml_scene(const std::string& xml, const std::st
 // emitters: a fan of triangles of unequal areas (so that picking a triangle
 // searches the distribution; checkered through its barycentrics, as it has
 // no uvs) and a flipped rectangle; a black panel and a two-sided red one
-// stand in it.
+// stand in it, and a panel whose reflectance is a bitmap (an EXR; its lanes
+// call Texture::eval_varying, the checkerboards' are the kernel's own).
 // With `animated`, the fan and the red panel are animated (instanced) shapes.
 constexpr size_t kFan = 1, kRedPanel = 4;
 std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
@@ -64,6 +65,8 @@ std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
     obj << "v 0 0.95 0\nv 0.5 0.95 0\nv 0.1 0.95 0.3\nv -0.4 0.95 0.2\nv -0.2 0.95 -0.5\n"
            "f 1 3 2\nf 1 4 3\nf 1 5 4\nf 1 2 5\n";
   }
+  std::filesystem::copy_file(std::string(GDVR_SOURCE_DIR) + "/scenes/matpreview/envmap.exr", dir / "bitmap.exr",
+                             std::filesystem::copy_options::overwrite_existing);
   const std::string xml = R"(<scene version="3.0.0">
   <integrator type="path"><integer name="max_depth" value="8"/></integrator>
   <sensor type="perspective">
@@ -96,6 +99,10 @@ std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
     <transform name="to_world"><scale value="0.25"/><rotate x="1" angle="70"/><translate x="0.3" y="-0.6" z="0.2"/></transform>
     <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.9, 0, 0"/></bsdf></bsdf>
   </shape>
+  <shape type="rectangle">
+    <transform name="to_world"><scale value="0.3"/><rotate y="1" angle="-50"/><translate x="-0.5" y="-0.5" z="0.6"/></transform>
+    <bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="bitmap.exr"/></texture></bsdf>
+  </shape>
 </scene>)";
   if (!animated) return load_xml_scene(xml, dir.string(), desc, {});
   return load_xml_scene(xml, dir.string(), desc, {kFan, kRedPanel});
@@ -125,6 +132,11 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   auto room = load_room(&room_desc);
   ASSERT_TRUE(room);
   EXPECT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  // The walls' checkerboard is the kernel's; the bitmap panel's texture is called.
+  const DiffuseSceneView& rv = room->diffuse_scene()->view();
+  EXPECT_EQ(rv.shape_flags[0] & (kShapeTextured | kShapeCheckerboard), kShapeTextured | kShapeCheckerboard);
+  EXPECT_EQ(rv.shape_checkerboard[0].a, 5.0f);
+  EXPECT_EQ(rv.shape_flags[5] & (kShapeTextured | kShapeCheckerboard), kShapeTextured);
 
   // Rough conductors are shaded by the kernel, the sphere lights by the
   // scalar stages (kShapeScalar), and next-event estimation asks FrameScene.
