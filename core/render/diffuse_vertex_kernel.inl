@@ -365,9 +365,10 @@ inline vd vsel_d(vl m, vd a, vd b) { return m ? a : b; }
 // sample_alias (alias_table.cpp) on eight lanes, in double as there, lane
 // i picking from the n slots at slots[i]: the bin, its pmf and the number
 // remapped within it. The slots' fields are read lane by lane and chosen
-// between without branches, so that the lanes' cache misses overlap (the
-// picks one lane at a time, with sample_alias's branch, were a third of
-// this kernel's time on matpreview).
+// between without branches: one lane at a time, with sample_alias's
+// data-dependent branch, the picks were a third of this kernel's samples on
+// matpreview, and this form rendered it 1.046x faster (prefetching the
+// slots on top bought nothing: docs/foundation.md, eighteenth round).
 struct AliasPicks {
   vu index;
   vf pmf, u;
@@ -432,8 +433,9 @@ inline V3 envmap_lookup(const EnvmapRecord& env, vi m, vf u, vf v) {
 }
 
 // FrameScene::sample_emitter_direction's environment map case for the lanes
-// in m, from (ux, uy): Distribution2D::sample (alias_picks), uv_to_direction, Transform::vector,
-// envmap_lookup (envmap_texels lane by lane). Returns where a sample was
+// in m, from (ux, uy): Distribution2D::sample (alias_picks),
+// uv_to_direction, Transform::vector, envmap_lookup (envmap_texels lane by
+// lane). Returns where a sample was
 // made; there d, pdf (emitter selection included) and weight are set.
 inline vi sample_envmap(const EnvmapRecord& env, float select_pdf, vi m, vf ux, vf uy, V3* d, vf* pdf,
                         V3* weight) {
