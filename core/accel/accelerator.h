@@ -36,7 +36,7 @@ struct RayHit {
 // only reads (time, mask, id, flags) are set once, here.
 class RayStreamBuffer {
  public:
-  static constexpr int kCapacity = 64;
+  static constexpr int kCapacity = 256;
 
   RayStreamBuffer() {
     for (Record& r : records_) {

@@ -18,7 +18,7 @@ class Distribution1D;
 struct Texture;
 
 // Paths in a diffuse batch (== kPathBatch: path_batch.cpp hands its batches over).
-constexpr int kDiffuseBatch = 64;
+constexpr int kDiffuseBatch = 256;
 
 // A triangle of a mesh with a diffuse BSDF, in world space at this frame:
 // what a vertex on it reads, in one cache line (with gathers of indices,

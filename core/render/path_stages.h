@@ -27,9 +27,16 @@
 namespace gdvr {
 
 // Paths in flight per thread in path_batch.h's batches, and the most rays
-// the stream casts below take at once. The states (~300 bytes each) stay in
-// L1/L2.
-constexpr int kPathBatch = 64;
+// the stream casts below take at once. The states (~300 bytes each; the
+// vector batch's ~200) stay in L2. 256 rather than 64: a batch's paths end at
+// different depths, so its later streams thin out, and every stream and
+// kernel pass has a fixed cost; with four times the paths per batch, the
+// camera rays go to Embree as one coherent stream of 256 and the tail of
+// thin streams is paid once per 256 paths. Paired one-thread renders against
+// 64: 1.063x on cbox, 1.036x on veach-mis, 1.053x on matpreview (512: 1.049,
+// 1.022, 1.067). Refilling the lanes of a 64-path batch as its paths end
+// (path regeneration) was slower: 0.95x (docs/foundation.md, nineteenth round).
+constexpr int kPathBatch = 256;
 
 struct PathState {
   Sampler sampler;

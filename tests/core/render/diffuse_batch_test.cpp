@@ -225,7 +225,7 @@ void start_paths(const FrameScene& scene, int w, int h, int n, std::vector<PathS
   }
 }
 
-// Batches of 64 paths and a partial one, vector (every kernel this CPU
+// Batches of kPathBatch paths and a partial one, vector (every kernel this CPU
 // runs) against scalar.
 void expect_kernel_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h,
                                         const DiffuseKernel& kernel);
