@@ -1,6 +1,7 @@
 #include "core/render/pt_integrator.h"
 
 #include <chrono>
+#include <memory>
 #include <vector>
 
 #include "core/render/path_batch.h"
@@ -11,9 +12,11 @@ namespace gdvr {
 namespace {
 
 // Per-pixel running sums in double so that thousands of samples of very
-// different magnitude accumulate without loss.
+// different magnitude accumulate without loss. Left uninitialised: each tile
+// zeroes its own pixels in its first pass, so the frame's sums (72 bytes a
+// pixel) are not first written, and faulted in, by one thread.
 struct PixelSums {
-  double sum[3] = {0, 0, 0}, sum_sq[3] = {0, 0, 0}, direct[3] = {0, 0, 0};
+  double sum[3], sum_sq[3], direct[3];
 };
 
 }  // namespace
@@ -51,7 +54,7 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
 
   PerspectiveCamera camera(scene.scene().camera, w, h);
-  std::vector<PixelSums> sums(size_t(w) * h);
+  std::unique_ptr<PixelSums[]> sums(new PixelSums[size_t(w) * size_t(h)]);
   std::atomic<uint64_t> rays{0}, invalid{0};
   int spp_done = 0;
 
@@ -76,6 +79,9 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
     const int first = spp_done, count = settings.spp;
     const double pass_start = elapsed();
     Status st = run_tiles(w, h, pass_tile_options(settings, control, start), [&](const Tile& tile) {
+      if (first == 0)
+        for (int y = tile.y0; y < tile.y1; ++y)
+          for (int x = tile.x0; x < tile.x1; ++x) sums[size_t(y) * w + x] = PixelSums{};
       PathCounters counters;
       trace_tile_samples(scene, path, camera, settings.seed, frame, tile, first, count, settings.paths_in_flight,
                          counters,
@@ -101,17 +107,25 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
   result.direct = Image(w, h, 3);
   result.variance = Image(w, h, 3);
   const double n = spp_done;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const PixelSums& ps = sums[size_t(y) * w + x];
-      for (int c = 0; c < 3; ++c) {
-        double mean = ps.sum[c] / n;
-        result.color.at(x, y, c) = float(mean);
-        result.direct.at(x, y, c) = float(ps.direct[c] / n);
-        double var = n > 1 ? std::max(0.0, (ps.sum_sq[c] / n - mean * mean) / (n - 1)) : 0.0;
-        result.variance.at(x, y, c) = float(var);
+  // The means and variances, tile by tile on the render's threads (not
+  // cancellable: the samples are all in).
+  TileRunOptions finish_opts;
+  finish_opts.threads = settings.threads;
+  finish_opts.tile_size = settings.tile_size;
+  Status finished = run_tiles(w, h, finish_opts, [&](const Tile& tile) {
+    for (int y = tile.y0; y < tile.y1; ++y)
+      for (int x = tile.x0; x < tile.x1; ++x) {
+        const PixelSums& ps = sums[size_t(y) * w + x];
+        for (int c = 0; c < 3; ++c) {
+          double mean = ps.sum[c] / n;
+          result.color.at(x, y, c) = float(mean);
+          result.direct.at(x, y, c) = float(ps.direct[c] / n);
+          double var = n > 1 ? std::max(0.0, (ps.sum_sq[c] / n - mean * mean) / (n - 1)) : 0.0;
+          result.variance.at(x, y, c) = float(var);
+        }
       }
-    }
+  });
+  if (!finished.ok()) return finished;
   if (!direct_pass.empty()) {
     // The pass's own variance is not measured (it is far below the paths').
     for (size_t k = 0; k < result.color.data().size(); ++k) result.color.data()[k] += direct_pass.data()[k];

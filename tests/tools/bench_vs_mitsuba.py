@@ -76,6 +76,7 @@ def main():
             me = [float(np.median([e[i] for e in m_err])) for i in range(2)]
             print(f"{name:12s} {gt:8.3f} {mt:10.3f} {mt / gt:7.2f}x {ge[0]:11.5f} / {ge[1]:9.5f} {me[0]:12.5f} / {me[1]:9.5f}", flush=True)
             results["scenes"][name] = {"gdvr_seconds": gt, "mitsuba_seconds": mt, "speedup": mt / gt,
+                                       "gdvr_run_seconds": g_times, "mitsuba_run_seconds": m_times,
                                        "gdvr_relmse_global": ge[0], "gdvr_relmse_per_pixel": ge[1],
                                        "mitsuba_relmse_global": me[0], "mitsuba_relmse_per_pixel": me[1]}
     results["load_average_end"] = float(open("/proc/loadavg").read().split()[0])
