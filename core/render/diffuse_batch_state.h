@@ -191,7 +191,13 @@ struct DiffuseSceneView {
 
 // kDiffuseBatch paths, field by field. The driver fills the ray, the hit and
 // `shade`; the kernel shades the lanes marked in `shade` and leaves the
-// others as they were.
+// others as they were. What it makes of a lane it shades depends on that
+// lane's rng_state, rng_inc, d, throughput, eta, depth and hit alone (other
+// fields it overwrites, or, like result and direct, leaves alone).
+// move_shaded_lane (diffuse_batch.cpp), which packs the shaded lanes
+// together before each pass, moves exactly those, so a new input of the
+// kernel's goes there too (DiffuseBatchTest catches a missing one as lanes
+// that differ from the scalar stages).
 struct alignas(64) DiffuseBatchState {
   uint64_t rng_state[kDiffuseBatch], rng_inc[kDiffuseBatch];  // the path's Pcg32
   alignas(64) float o[3][kDiffuseBatch], d[3][kDiffuseBatch];   // the ray traced next
