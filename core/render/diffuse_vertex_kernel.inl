@@ -1001,9 +1001,16 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   const vi connect = lit & ~is_black(f);
   const vf w = vsel(delta, splat(1.0f), mis_power(es_pdf, bsdf_pdf));
   store3(st->shadow_contribution, k, throughput * f * weight * w, connect);
-  store3(st->shadow_o, k, offset_p(p, offset_floor, n, es_d), connect);
-  store3(st->shadow_d, k, es_d, connect);
-  store1(st->shadow_tmax, k, vsel(dist == kInfinity, splat(kInfinity), dist * (1.0f - kShadowEpsilon)), connect);
+  // shadow_ray(): aimed from the offset origin at the emitter point.
+  const V3 shadow_o = offset_p(p, offset_floor, n, es_d);
+  const V3 to_target = (p + es_d * dist) - shadow_o;
+  const vf to_len = vsqrt(vdot(to_target, to_target));
+  const vi finite_dist = ~(dist == kInfinity);
+  const vi reaches = finite_dist & (to_len > 0.0f);
+  store3(st->shadow_o, k, shadow_o, connect);
+  store3(st->shadow_d, k, vsel3(reaches, to_target * (1.0f / to_len), es_d), connect);
+  store1(st->shadow_tmax, k,
+         vsel(finite_dist, vsel(reaches, to_len * (1.0f - kShadowEpsilon), splat(0.0f)), splat(kInfinity)), connect);
   store1(st->shadow_pending, k, connect, shade);
 
   // ---- draw_bsdf_numbers, then sample_bsdf_drawn ----

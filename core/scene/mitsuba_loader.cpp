@@ -540,7 +540,7 @@ class SceneBuilder {
       }
     }
     GDVR_RETURN_IF_ERROR(props.check_all_used());
-    if (s.bsdf < 0) s.bsdf = default_bsdf();
+    if (s.bsdf < 0) s.bsdf = default_bsdf(/* emits = */ emitter_elem != nullptr);
     int shape_index = int(scene_.shapes.size());
     if (emitter_elem) {
       Emitter em;
@@ -565,17 +565,20 @@ class SceneBuilder {
     return m;
   }
 
-  int default_bsdf() {
-    // Mitsuba gives shapes without a BSDF a diffuse one of reflectance 0.5.
-    if (default_bsdf_ < 0) {
+  // Mitsuba 3 gives a shape without a BSDF a diffuse one of reflectance 0.5,
+  // or 0 where the shape emits (shape.cpp): a light reflects nothing unless
+  // its file says so.
+  int default_bsdf(bool emits) {
+    int& index = emits ? default_emitter_bsdf_ : default_bsdf_;
+    if (index < 0) {
       Bsdf b;
       b.type = BsdfType::kDiffuse;
-      b.reflectance = Texture::constant(Rgb(0.5f));
+      b.reflectance = Texture::constant(Rgb(emits ? 0.0f : 0.5f));
       b.finalize();
       scene_.bsdfs.push_back(b);
-      default_bsdf_ = int(scene_.bsdfs.size()) - 1;
+      index = int(scene_.bsdfs.size()) - 1;
     }
-    return default_bsdf_;
+    return index;
   }
 
   // ---- Sensor, sampler, film, integrator ----
@@ -712,6 +715,7 @@ class SceneBuilder {
   std::map<std::string, std::shared_ptr<const TriangleMesh>> mesh_cache_;
   std::map<std::string, bool> area_emitter_used_;
   int default_bsdf_ = -1;
+  int default_emitter_bsdf_ = -1;
 };
 
 Expected<Scene> load_impl(const std::string& path, const std::string* text, const std::string& base_dir,

@@ -236,6 +236,25 @@ TEST_F(MitsubaLoaderTest, BsdfVariety) {
   EXPECT_FLOAT_EQ(def.reflectance.value.r, 0.5f);
 }
 
+// Mitsuba 3 gives an emitting shape without a BSDF a black diffuse one, not
+// the 0.5 of other shapes: the light reflects nothing. With 0.5, a closed room
+// lit by such a light rendered 1.2 % brighter than Mitsuba at max_depth 12.
+TEST_F(MitsubaLoaderTest, EmitterWithoutBsdfReflectsNothing) {
+  auto s = load_text(R"(<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+<shape type="rectangle"/>
+<shape type="cube"><bsdf type="diffuse"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>)");
+  ASSERT_TRUE(s.ok()) << s.status().to_string();
+  ASSERT_EQ(s->shapes.size(), 4u);
+  for (int i : {0, 1}) {
+    const Bsdf& b = s->bsdfs[size_t(s->shapes[size_t(i)].bsdf)];
+    EXPECT_EQ(b.type, BsdfType::kDiffuse) << i;
+    EXPECT_EQ(b.reflectance.value.r, 0.0f) << i;
+  }
+  EXPECT_FLOAT_EQ(s->bsdfs[size_t(s->shapes[2].bsdf)].reflectance.value.r, 0.5f);
+  EXPECT_FLOAT_EQ(s->bsdfs[size_t(s->shapes[3].bsdf)].reflectance.value.r, 0.5f);  // its own diffuse
+}
+
 TEST_F(MitsubaLoaderTest, EmittersAndSensorOptions) {
   auto s = load_text(R"(<emitter type="spot"><transform name="to_world"><lookat origin="0,0,0" target="0,0,1" up="0,1,0"/></transform><float name="cutoff_angle" value="30"/></emitter>
 <emitter type="directional"><vector name="direction" x="0" y="-1" z="0"/><rgb name="irradiance" value="2"/></emitter>
