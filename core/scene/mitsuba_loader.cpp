@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "core/bsdf/conductor_presets.h"
 #include "core/io/image_io.h"
@@ -18,6 +20,7 @@
 #include "core/scene/ply_reader.h"
 #include "core/scene/serialized_reader.h"
 #include "core/scene/shape_tessellation.h"
+#include "core/scene/spectrum_to_rgb.h"
 #include "core/util/path_confinement.h"
 
 namespace gdvr {
@@ -161,7 +164,7 @@ class SceneBuilder {
     if (!c) return Status::Ok();
     if (one_of(c->tag, {"rgb", "spectrum", "float"})) {
       Rgb v;
-      GDVR_RETURN_IF_ERROR(parse_rgb_value(*c, &v));
+      GDVR_RETURN_IF_ERROR(color_value(*c, spectrum_role(name, /* within_emitter = */ false), &v));
       *out = Texture::constant(v);
       return Status::Ok();
     }
@@ -170,6 +173,32 @@ class SceneBuilder {
     if ((*target)->tag != "texture")
       return props.error(*c, "parameter '" + name + "' must be a colour or a <texture>, not <" + (*target)->tag + ">");
     return texture_of(**target, out);
+  }
+
+  // A colour-valued parameter (<rgb>, <spectrum>, <float>) as Mitsuba's RGB
+  // variants read it (spectrum_to_rgb.h). Absent: *out untouched.
+  Status get_color(MitsubaProps& props, const std::string& name, bool within_emitter, Rgb* out) {
+    Expected<const XmlElement*> c = props.take_color(name);
+    if (!c.ok()) return c.status();
+    if (!*c) return Status::Ok();
+    return color_value(**c, spectrum_role(name, within_emitter), out);
+  }
+
+  Status color_value(const XmlElement& c, SpectrumRole role, Rgb* out) {
+    const std::string* filename = c.tag == "spectrum" ? c.find_attr("filename") : nullptr;
+    if (!filename) return parse_rgb_value(c, role, out);
+    Expected<std::string> path = resolve(*filename, c);
+    if (!path.ok()) return path.status();
+    std::ifstream in(*path, std::ios::binary);
+    if (!in) return Status(StatusCode::kNotFound, c.where() + ": cannot read spectrum file '" + *filename + "'");
+    std::ostringstream text;
+    text << in.rdbuf();
+    std::vector<double> wavelengths, values;
+    GDVR_RETURN_IF_ERROR(parse_spd(text.str(), *filename, &wavelengths, &values));
+    Expected<Rgb> rgb = spectrum_list_to_rgb(wavelengths, values, role);
+    if (!rgb.ok()) return c.error(rgb.status().message());
+    *out = *rgb;
+    return Status::Ok();
   }
 
   Status texture_of(const XmlElement& e, Texture* out) {
@@ -217,8 +246,8 @@ class SceneBuilder {
       t.bitmap = std::make_shared<const Image>(std::move(*img));
     } else if (type == "checkerboard") {
       t.type = TextureType::kCheckerboard;
-      GDVR_RETURN_IF_ERROR(props.get_rgb("color0", &t.color0));
-      GDVR_RETURN_IF_ERROR(props.get_rgb("color1", &t.color1));
+      GDVR_RETURN_IF_ERROR(get_color(props, "color0", false, &t.color0));
+      GDVR_RETURN_IF_ERROR(get_color(props, "color1", false, &t.color1));
     } else {
       return unknown_plugin(e);
     }
@@ -318,8 +347,8 @@ class SceneBuilder {
       GDVR_RETURN_IF_ERROR(props.get_string("material", &material));
       if (named && (props.has("eta") || props.has("k"))) return props.error(e, "give either 'material' or eta/k, not both");
       if (!lookup_conductor(material, &b.eta, &b.k)) return props.error(e, "unknown conductor material '" + material + "'");
-      GDVR_RETURN_IF_ERROR(props.get_rgb("eta", &b.eta));
-      GDVR_RETURN_IF_ERROR(props.get_rgb("k", &b.k));
+      GDVR_RETURN_IF_ERROR(get_color(props, "eta", false, &b.eta));
+      GDVR_RETURN_IF_ERROR(get_color(props, "k", false, &b.k));
       GDVR_RETURN_IF_ERROR(get_texture(props, "specular_reflectance", &b.specular_reflectance));
       if (type == "roughconductor") GDVR_RETURN_IF_ERROR(get_microfacet(props, &b, /*anisotropic=*/true));
     } else if (type == "plastic" || type == "roughplastic") {
@@ -361,7 +390,7 @@ class SceneBuilder {
     em.id = e.attr("id");
     if (type == "area") {
       em.type = EmitterType::kArea;
-      GDVR_RETURN_IF_ERROR(props.get_rgb("radiance", &em.radiance));
+      GDVR_RETURN_IF_ERROR(get_color(props, "radiance", true, &em.radiance));
     } else if (type == "point") {
       em.type = EmitterType::kPoint;
       if (props.has("position") && props.has("to_world")) return props.error(e, "give either 'position' or 'to_world', not both");
@@ -371,11 +400,11 @@ class SceneBuilder {
         em.to_world = Transform::translate(pos);
       }
       GDVR_RETURN_IF_ERROR(props.get_transform("to_world", &em.to_world));
-      GDVR_RETURN_IF_ERROR(props.get_rgb("intensity", &em.intensity));
+      GDVR_RETURN_IF_ERROR(get_color(props, "intensity", true, &em.intensity));
     } else if (type == "spot") {
       em.type = EmitterType::kSpot;
       GDVR_RETURN_IF_ERROR(props.get_transform("to_world", &em.to_world));
-      GDVR_RETURN_IF_ERROR(props.get_rgb("intensity", &em.intensity));
+      GDVR_RETURN_IF_ERROR(get_color(props, "intensity", true, &em.intensity));
       GDVR_RETURN_IF_ERROR(props.get_float("cutoff_angle", &em.cutoff_angle));
       em.beam_width = em.cutoff_angle * 0.75f;
       GDVR_RETURN_IF_ERROR(props.get_float("beam_width", &em.beam_width));
@@ -395,10 +424,10 @@ class SceneBuilder {
         if (!Transform::look_at(Vec3f(0.0f), d, up, &em.to_world)) return props.error(*at, "degenerate direction");
       }
       GDVR_RETURN_IF_ERROR(props.get_transform("to_world", &em.to_world));
-      GDVR_RETURN_IF_ERROR(props.get_rgb("irradiance", &em.irradiance));
+      GDVR_RETURN_IF_ERROR(get_color(props, "irradiance", true, &em.irradiance));
     } else if (type == "constant") {
       em.type = EmitterType::kConstant;
-      GDVR_RETURN_IF_ERROR(props.get_rgb("radiance", &em.radiance));
+      GDVR_RETURN_IF_ERROR(get_color(props, "radiance", true, &em.radiance));
     } else if (type == "envmap") {
       em.type = EmitterType::kEnvmap;
       std::string filename;

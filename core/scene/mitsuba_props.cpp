@@ -1,9 +1,11 @@
 #include "core/scene/mitsuba_props.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <climits>
 #include <cmath>
 #include <cstdlib>
+#include <sstream>
 
 namespace gdvr {
 
@@ -106,15 +108,36 @@ Status parse_float_list(const XmlElement& at, const std::string& attr, const std
   return Status::Ok();
 }
 
-Status parse_rgb_value(const XmlElement& e, Rgb* out) {
+Status parse_rgb_value(const XmlElement& e, SpectrumRole role, Rgb* out) {
   std::string text;
   GDVR_RETURN_IF_ERROR(require_attr(e, "value", &text));
-  if (e.tag == "spectrum" && text.find(':') != std::string::npos)
-    return Status(StatusCode::kUnimplemented, e.where() + ": wavelength:value spectra are not supported (gdvr renders RGB)");
+  if (e.tag == "spectrum" && text.find(':') != std::string::npos) {
+    // wavelength:value pairs, separated by commas and/or spaces.
+    std::vector<double> wavelengths, values;
+    std::string pairs = text;
+    std::replace(pairs.begin(), pairs.end(), ',', ' ');
+    std::istringstream in(pairs);
+    std::string token;
+    while (in >> token) {
+      const size_t colon = token.find(':');
+      char* end = nullptr;
+      const double w = colon == std::string::npos ? NAN : std::strtod(token.c_str(), &end);
+      const bool w_ok = colon != std::string::npos && end == token.c_str() + colon;
+      const double v = w_ok ? std::strtod(token.c_str() + colon + 1, &end) : NAN;
+      if (!w_ok || end != token.c_str() + token.size() || colon + 1 == token.size())
+        return e.error("<spectrum> value: '" + token + "' is not a wavelength:value pair");
+      wavelengths.push_back(w);
+      values.push_back(v);
+    }
+    Expected<Rgb> rgb = spectrum_list_to_rgb(wavelengths, values, role);
+    if (!rgb.ok()) return e.error(rgb.status().message());
+    *out = *rgb;
+    return Status::Ok();
+  }
   std::vector<double> v;
   GDVR_RETURN_IF_ERROR(parse_float_list(e, "value", text, &v));
   if (v.size() == 1) {
-    *out = Rgb(float(v[0]));
+    *out = e.tag == "spectrum" ? constant_spectrum_to_rgb(float(v[0]), role) : Rgb(float(v[0]));
   } else if (v.size() == 3 && e.tag != "spectrum" && e.tag != "float") {
     *out = Rgb(float(v[0]), float(v[1]), float(v[2]));
   } else {
@@ -223,9 +246,13 @@ Status MitsubaProps::init(const XmlElement& plugin) {
     } else if (c.tag == "transform") {
       GDVR_RETURN_IF_ERROR(check_attrs(c, {"name"}));
     } else if (in_list(c.tag, {"float", "integer", "boolean", "string", "rgb", "spectrum"})) {
-      if (c.tag == "spectrum" && c.find_attr("filename"))
-        return Status(StatusCode::kUnimplemented, c.where() + ": spectra from files are not supported (gdvr renders RGB)");
-      GDVR_RETURN_IF_ERROR(check_attrs(c, {"name", "value"}));
+      if (c.tag == "spectrum") {
+        GDVR_RETURN_IF_ERROR(check_attrs(c, {"name", "value", "filename"}));
+        if (!c.find_attr("value") == !c.find_attr("filename"))
+          return c.error("<spectrum> needs either a 'value' or a 'filename'");
+      } else {
+        GDVR_RETURN_IF_ERROR(check_attrs(c, {"name", "value"}));
+      }
     } else {
       return error(c, "unknown tag <" + c.tag + ">");
     }
@@ -320,12 +347,12 @@ Status MitsubaProps::get_string(const std::string& name, std::string* out) {
   return Status::Ok();
 }
 
-Status MitsubaProps::get_rgb(const std::string& name, Rgb* out) {
+Expected<const XmlElement*> MitsubaProps::take_color(const std::string& name) {
   const Entry* e = find(name);
-  if (!e) return Status::Ok();
+  if (!e) return static_cast<const XmlElement*>(nullptr);
   e->used = true;
   GDVR_RETURN_IF_ERROR(expect_tag(*e, {"rgb", "spectrum", "float"}, name));
-  return parse_rgb_value(*e->elem, out);
+  return e->elem;
 }
 
 Status MitsubaProps::get_point(const std::string& name, Vec3f* out) {

@@ -10,6 +10,7 @@
 #include "core/math/transform.h"
 #include "core/math/vec.h"
 #include "core/scene/mitsuba_xml.h"
+#include "core/scene/spectrum_to_rgb.h"
 #include "core/util/status.h"
 
 namespace gdvr {
@@ -37,7 +38,9 @@ class MitsubaProps {
   Status get_int(const std::string& name, int* out);
   Status get_bool(const std::string& name, bool* out);
   Status get_string(const std::string& name, std::string* out);
-  Status get_rgb(const std::string& name, Rgb* out);        // <rgb>, <spectrum> (constant), <float>
+  // The colour parameter `name` (<rgb>, <spectrum> or <float>), marked as
+  // used; null when absent. The loader converts it (it may name a file).
+  Expected<const XmlElement*> take_color(const std::string& name);
   Status get_point(const std::string& name, Vec3f* out);    // <point> or <vector>
   Status get_transform(const std::string& name, Transform* out);
   Status get_matrix(const std::string& name, Matrix4* out);  // unchecked (to_uv may be 2D)
@@ -63,7 +66,10 @@ class MitsubaProps {
 
 // Value parsing shared with the loader. All reject non-finite numbers.
 Status parse_float_list(const XmlElement& at, const std::string& attr, const std::string& text, std::vector<double>* out);
-Status parse_rgb_value(const XmlElement& e, Rgb* out);
+// An <rgb>, <float> or inline <spectrum> value as linear sRGB, a spectrum
+// converted for its role (spectrum_to_rgb.h). A <spectrum filename=...> is
+// the loader's to read.
+Status parse_rgb_value(const XmlElement& e, SpectrumRole role, Rgb* out);
 Status parse_transform_element(const XmlElement& e, Matrix4* out);
 
 }  // namespace gdvr
