@@ -80,6 +80,7 @@ class SceneBuilder {
   }
 
   Expected<Scene> build() {
+    scene_.warnings = doc_.warnings;
     GDVR_RETURN_IF_ERROR(index_ids(doc_.root));
     bool have_sensor = false, have_integrator = false;
     for (const XmlElement& e : doc_.root.children) {
@@ -233,7 +234,10 @@ class SceneBuilder {
       GDVR_RETURN_IF_ERROR(props.get_string("wrap_mode", &wrap_mode));
       GDVR_RETURN_IF_ERROR(props.get_string("format", &format));
       if (filename.empty()) return props.error(e, "needs a 'filename'");
-      if (!one_of(filter_type, {"bilinear", "nearest"})) return props.error(e, "filter_type must be bilinear or nearest");
+      // Mitsuba 0.x also had mip-mapped lookups; gdvr has none (nor does Mitsuba 3).
+      bool legacy_filter = e.from_legacy_file() && one_of(filter_type, {"trilinear", "ewa"});
+      if (!one_of(filter_type, {"bilinear", "nearest"}) && !legacy_filter)
+        return props.error(e, "filter_type must be bilinear or nearest");
       if (!one_of(wrap_mode, {"repeat", "mirror", "clamp"})) return props.error(e, "wrap_mode must be repeat, mirror or clamp");
       if (filter_type != "bilinear")
         scene_.warnings.push_back(e.where() + ": bitmap filter_type '" + filter_type + "' rendered as bilinear");
@@ -349,6 +353,14 @@ class SceneBuilder {
       if (!lookup_conductor(material, &b.eta, &b.k)) return props.error(e, "unknown conductor material '" + material + "'");
       GDVR_RETURN_IF_ERROR(get_color(props, "eta", false, &b.eta));
       GDVR_RETURN_IF_ERROR(get_color(props, "k", false, &b.k));
+      if (e.from_legacy_file() && props.has("ext_eta")) {
+        // Mitsuba 0.x conductors took the exterior's IOR and divided eta and k
+        // by it; Mitsuba 3 dropped the parameter (its exterior is vacuum).
+        float ext_eta = 1.0f;
+        GDVR_RETURN_IF_ERROR(get_ior(props, "ext_eta", &ext_eta));
+        b.eta = b.eta / Rgb(ext_eta);
+        b.k = b.k / Rgb(ext_eta);
+      }
       GDVR_RETURN_IF_ERROR(get_texture(props, "specular_reflectance", &b.specular_reflectance));
       if (type == "roughconductor") GDVR_RETURN_IF_ERROR(get_microfacet(props, &b, /*anisotropic=*/true));
     } else if (type == "plastic" || type == "roughplastic") {
@@ -654,7 +666,12 @@ class SceneBuilder {
   Status build_sampler(const XmlElement& e) {
     // gdvr draws every sample from its own hashed stream (core/math/rng.h);
     // only the sample count of Mitsuba's samplers carries over.
-    if (!one_of(e.attr("type"), {"independent", "stratified", "multijitter", "ldsampler", "orthogonal"})) return unknown_plugin(e);
+    std::string type = e.attr("type");
+    bool legacy_type = e.from_legacy_file() && one_of(type, {"sobol", "halton", "hammersley"});
+    if (!one_of(type, {"independent", "stratified", "multijitter", "ldsampler", "orthogonal"}) && !legacy_type)
+      return unknown_plugin(e);
+    if (legacy_type)
+      scene_.warnings.push_back(e.where() + ": Mitsuba 0.x sampler '" + type + "' read for its sample_count only");
     MitsubaProps props;
     GDVR_RETURN_IF_ERROR(props.init(e));
     int seed = 0;
@@ -662,14 +679,25 @@ class SceneBuilder {
     GDVR_RETURN_IF_ERROR(props.get_int("sample_count", &scene_.defaults.spp));
     GDVR_RETURN_IF_ERROR(props.get_int("seed", &seed));
     GDVR_RETURN_IF_ERROR(props.get_bool("jitter", &jitter));
+    if (e.from_legacy_file()) ignore_params(props, {"dimension", "scramble"}, "Mitsuba 0.x sample generation");
     if (scene_.defaults.spp <= 0) return props.error(e, "sample_count must be positive");
     return props.check_all_used();
   }
 
   Status build_film(const XmlElement& e) {
-    if (e.attr("type") != "hdrfilm") return unknown_plugin(e);
+    // gdvr writes linear radiance (EXR) whatever the film: a Mitsuba 0.x
+    // ldrfilm's tone mapping and gamma only changed the file it wrote.
+    bool ldrfilm = e.from_legacy_file() && e.attr("type") == "ldrfilm";
+    if (e.attr("type") != "hdrfilm" && !ldrfilm) return unknown_plugin(e);
+    if (ldrfilm)
+      scene_.warnings.push_back(e.where() + ": Mitsuba 0.x ldrfilm read as hdrfilm (gdvr writes linear EXR)");
     MitsubaProps props;
     GDVR_RETURN_IF_ERROR(props.init(e));
+    // Mitsuba 3's hdrfilm accepts and ignores banner in any file.
+    ignore_params(props, {"banner"}, "gdvr draws no banner");
+    if (e.from_legacy_file())
+      ignore_params(props, {"high_quality_edges", "attach_log", "gamma", "exposure", "tonemap_method", "key", "burn"},
+                    "Mitsuba 0.x output settings; gdvr writes linear EXR");
     std::string pixel_format, file_format, component_format;
     bool sample_border = false;
     GDVR_RETURN_IF_ERROR(props.get_int("width", &scene_.defaults.width));
@@ -717,9 +745,25 @@ class SceneBuilder {
     GDVR_RETURN_IF_ERROR(props.get_int("max_depth", &d.max_depth));
     GDVR_RETURN_IF_ERROR(props.get_int("rr_depth", &d.rr_depth));
     GDVR_RETURN_IF_ERROR(props.get_bool("hide_emitters", &d.hide_emitters));
+    if (e.from_legacy_file())
+      ignore_params(props, {"strict_normals"}, "Mitsuba 0.x only; gdvr follows Mitsuba 3, which has no strict normals");
     if (d.max_depth < -1) return props.error(e, "max_depth must be -1 (unbounded) or >= 0");
     if (d.rr_depth <= 0) return props.error(e, "rr_depth must be positive");
     return props.check_all_used();
+  }
+
+  // ---- Parameters without effect ----
+
+  // Takes those of `names` that are present and records them in one warning:
+  // settings that change nothing in gdvr's image (mostly what Mitsuba 0.x
+  // films and samplers took and Mitsuba 3 dropped). Callers pass the 0.x ones
+  // only for upgraded files: in a Mitsuba 3 file they stay unknown parameters.
+  void ignore_params(MitsubaProps& props, std::initializer_list<const char*> names, const std::string& why) {
+    std::string list;
+    for (const char* n : names)
+      if (props.take(n)) list += (list.empty() ? "'" : ", '") + std::string(n) + "'";
+    if (!list.empty())
+      scene_.warnings.push_back(props.plugin().where() + ": " + props.what() + ": ignored " + list + " (" + why + ")");
   }
 
   Status check_defaults() const {

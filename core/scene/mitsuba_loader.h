@@ -1,4 +1,5 @@
-// Loader for the Mitsuba 3 XML subset gdvr supports. Every error names the
+// Loader for the Mitsuba 3 XML subset gdvr supports (Mitsuba 0.x files are
+// upgraded first, as Mitsuba 3 does: mitsuba_upgrade.h). Every error names the
 // file, the line and the offending plugin/attribute; unknown attributes and
 // plugins are errors, never silently ignored.
 #pragma once

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/scene/mitsuba_upgrade.h"
 #include "core/util/path_confinement.h"
 
 namespace gdvr {
@@ -57,7 +58,12 @@ class XmlReader {
     }
     stack_.push_back(canonical_or_self(path));
     XmlElement* root = &doc_->root;
-    return parse(path, content, /*include_site=*/nullptr, root);
+    GDVR_RETURN_IF_ERROR(parse(path, content, /*include_site=*/nullptr, root));
+    // One pass over the whole tree: each element is upgraded by the version of
+    // the file it came from, so that 0.x and 3.x files can include each other.
+    bool any_legacy =
+        std::any_of(doc_->sources.begin(), doc_->sources.end(), [](const XmlSource& s) { return s.legacy; });
+    return any_legacy ? upgrade_legacy_elements(root, &doc_->warnings) : Status::Ok();
   }
 
  private:
@@ -80,7 +86,7 @@ class XmlReader {
   // an include, the included <scene>'s children are appended to `out`.
   Status parse(const std::string& path, const std::string& content, const XmlElement* include_site, XmlElement* out) {
     doc_->sources.push_back(XmlSource{path, fs::path(path).parent_path().string()});
-    const XmlSource* src = &doc_->sources.back();
+    XmlSource* src = &doc_->sources.back();
     LineIndex lines(content);
     pugi::xml_document xml;
     pugi::xml_parse_result res = xml.load_buffer(content.data(), content.size(), pugi::parse_default, pugi::encoding_utf8);
@@ -101,6 +107,17 @@ class XmlReader {
     for (pugi::xml_attribute a = scene.first_attribute(); a; a = a.next_attribute())
       if (std::string(a.name()) != "version")
         return invalid_argument(path + ":" + std::to_string(scene_line) + ": unknown attribute '" + a.name() + "' of <scene>");
+    // Without a version a file is read as Mitsuba 3 (Mitsuba itself requires one).
+    if (pugi::xml_attribute v = scene.attribute("version")) {
+      SceneVersion version;
+      if (!parse_scene_version(v.value(), &version))
+        return invalid_argument(path + ":" + std::to_string(scene_line) + ": invalid version number '" + v.value() +
+                                "' of <scene> (expected major.minor.patch, e.g. 3.0.0)");
+      src->legacy = version.is_legacy();
+      if (src->legacy)
+        doc_->warnings.push_back(path + ":" + std::to_string(scene_line) + ": Mitsuba " + v.value() +
+                                 " file upgraded to Mitsuba 3 names as Mitsuba 3 does (maxDepth -> max_depth, ...)");
+    }
     if (!include_site) {
       out->tag = "scene";
       out->source = src;

@@ -1,7 +1,8 @@
 // First stage of Mitsuba scene loading: reads the XML (pugixml), expands
-// <include>, applies <default> and $name substitution, and yields a plain
-// element tree in which every element knows its file and line. The second
-// stage (mitsuba_loader.cpp) turns this tree into a Scene.
+// <include>, applies <default> and $name substitution, upgrades the elements
+// of Mitsuba 0.x files as Mitsuba 3 does (mitsuba_upgrade.h), and yields a
+// plain element tree in which every element knows its file and line. The
+// second stage (mitsuba_loader.cpp) turns this tree into a Scene.
 #pragma once
 
 #include <deque>
@@ -17,6 +18,9 @@ namespace gdvr {
 struct XmlSource {
   std::string path;  // as shown in messages
   std::string dir;   // folder of the file, for relative references
+  // <scene version> below 2.0.0: a Mitsuba 0.x file, upgraded to Mitsuba 3
+  // names as it was read (mitsuba_upgrade.h).
+  bool legacy = false;
 };
 
 struct XmlElement {
@@ -35,6 +39,8 @@ struct XmlElement {
     const std::string* v = find_attr(name);
     return v ? *v : std::string();
   }
+  // Read from a Mitsuba 0.x file (see XmlSource::legacy).
+  bool from_legacy_file() const { return source && source->legacy; }
   // "file.xml:12"
   std::string where() const;
   // invalid_argument("file.xml:12: <msg>")
@@ -46,6 +52,7 @@ struct XmlDocument {
   std::deque<XmlSource> sources;
   XmlElement root;  // the <scene> element, includes expanded
   std::map<std::string, std::string> params;  // final parameter values
+  std::vector<std::string> warnings;          // for Scene::warnings (upgraded files, renamed ids)
 };
 
 struct XmlReadOptions {

@@ -24,7 +24,7 @@ def put(target, name, data):
 def mitsuba_seeds():
     for rel in ["scenes/cbox/cbox-rgb.xml", "scenes/demo/cbox_demo.xml", "scenes/veach-mis/scene.xml",
                 "scenes/cornell-box/scene.xml", "scenes/matpreview/matpreview.xml",
-                "scenes/cbox/fragments/bsdfs-rgb.xml"]:
+                "scenes/cbox/fragments/bsdfs-rgb.xml", "scenes/veach-mis/scene-v0.5.xml"]:
         with open(os.path.join(ROOT, rel), "rb") as f:
             put("mitsuba_xml", rel.replace("/", "_"), f.read())
     # Self-contained: every shape, BSDF and emitter kind the loader knows, plus
