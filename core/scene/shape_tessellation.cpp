@@ -15,20 +15,30 @@ TriangleMesh make_rectangle_mesh() {
 
 TriangleMesh make_cube_mesh() {
   TriangleMesh m;
-  // Each face: its outward normal n and two in-plane axes (s, t) with s x t = n,
-  // so that counter-clockwise corners seen from outside give outward winding.
-  const Vec3f normals[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (const Vec3f& n : normals) {
-    Vec3f s = std::abs(n.x) > 0 ? Vec3f(0, n.x, 0) : (std::abs(n.y) > 0 ? Vec3f(0, 0, n.y) : Vec3f(n.z, 0, 0));
-    Vec3f t = cross(n, s);
-    uint32_t base = uint32_t(m.positions.size());
-    const float corners[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
-    for (const auto& c : corners) {
-      m.positions.push_back(n + s * c[0] + t * c[1]);
-      m.normals.push_back(n);
-      m.uvs.push_back(Vec2f(0.5f * (c[0] + 1), 0.5f * (c[1] + 1)));
+  // Mitsuba 3's cube: per face, its outward normal and its corners in the
+  // order that carries uv (0, 1), (1, 1), (1, 0), (0, 0), as two triangles
+  // (0, 1, 2), (3, 0, 2). The uv layout is what a texture on a cube shows.
+  struct Face {
+    Vec3f n;
+    Vec3f corners[4];
+  };
+  const Face faces[6] = {
+      {{0, -1, 0}, {{1, -1, -1}, {1, -1, 1}, {-1, -1, 1}, {-1, -1, -1}}},
+      {{0, 1, 0}, {{1, 1, -1}, {-1, 1, -1}, {-1, 1, 1}, {1, 1, 1}}},
+      {{1, 0, 0}, {{1, -1, -1}, {1, 1, -1}, {1, 1, 1}, {1, -1, 1}}},
+      {{0, 0, 1}, {{1, -1, 1}, {1, 1, 1}, {-1, 1, 1}, {-1, -1, 1}}},
+      {{-1, 0, 0}, {{-1, -1, 1}, {-1, 1, 1}, {-1, 1, -1}, {-1, -1, -1}}},
+      {{0, 0, -1}, {{1, 1, -1}, {1, -1, -1}, {-1, -1, -1}, {-1, 1, -1}}},
+  };
+  const Vec2f uvs[4] = {{0, 1}, {1, 1}, {1, 0}, {0, 0}};
+  for (const Face& f : faces) {
+    const uint32_t base = uint32_t(m.positions.size());
+    for (int i = 0; i < 4; ++i) {
+      m.positions.push_back(f.corners[i]);
+      m.normals.push_back(f.n);
+      m.uvs.push_back(uvs[i]);
     }
-    m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base + 3, base, base + 2});
   }
   return m;
 }

@@ -9,7 +9,7 @@ namespace gdvr {
 // [-1,1]^2 at z = 0, normal +z, uv [0,1]^2 (two triangles).
 TriangleMesh make_rectangle_mesh();
 // [-1,1]^3, 24 vertices (4 per face, so normals stay flat), 12 triangles,
-// outward normals, uv [0,1]^2 on every face.
+// outward normals, uv [0,1]^2 on every face laid out as Mitsuba 3's cube.
 TriangleMesh make_cube_mesh();
 // Unit disk at z = 0, normal +z, as a fan of `segments` triangles. Mitsuba's
 // disk is analytic with uv = (r, phi / 2pi); each segment gets its own centre
