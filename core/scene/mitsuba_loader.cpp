@@ -239,10 +239,11 @@ class SceneBuilder {
       if (!one_of(filter_type, {"bilinear", "nearest"}) && !legacy_filter)
         return props.error(e, "filter_type must be bilinear or nearest");
       if (!one_of(wrap_mode, {"repeat", "mirror", "clamp"})) return props.error(e, "wrap_mode must be repeat, mirror or clamp");
-      if (filter_type != "bilinear")
+      if (legacy_filter)
         scene_.warnings.push_back(e.where() + ": bitmap filter_type '" + filter_type + "' rendered as bilinear");
-      if (wrap_mode != "repeat")
-        scene_.warnings.push_back(e.where() + ": bitmap wrap_mode '" + wrap_mode + "' rendered as repeat");
+      t.filter = filter_type == "nearest" ? TextureFilter::kNearest : TextureFilter::kBilinear;
+      t.wrap = wrap_mode == "mirror" ? TextureWrap::kMirror
+                                     : (wrap_mode == "clamp" ? TextureWrap::kClamp : TextureWrap::kRepeat);
       Expected<std::string> path = resolve(filename, e);
       if (!path.ok()) return path.status();
       Expected<Image> img = read_rgb_image(*path, raw);

@@ -1,6 +1,6 @@
-// Textures as Mitsuba 3 defines them: a constant colour, a bitmap (bilinear,
-// repeat wrap, PNG/JPEG decoded from sRGB to linear, EXR linear), or a
-// checkerboard. Evaluated at a surface uv, after the texture's to_uv transform.
+// Textures as Mitsuba 3 defines them: a constant colour, a bitmap (bilinear
+// or nearest, repeat, mirror or clamp wrap, PNG/JPEG decoded from sRGB to
+// linear, EXR linear), or a checkerboard. Evaluated at a surface uv, after the texture's to_uv transform.
 #pragma once
 
 #include <memory>
@@ -11,6 +11,8 @@
 namespace gdvr {
 
 enum class TextureType { kConstant, kBitmap, kCheckerboard };
+enum class TextureFilter { kBilinear, kNearest };
+enum class TextureWrap { kRepeat, kMirror, kClamp };
 
 // 2D affine uv transform: uv' = (a*u + b*v + c, d*u + e*v + f).
 struct UvTransform {
@@ -23,6 +25,8 @@ struct Texture {
   TextureType type = TextureType::kConstant;
   Rgb value{0.5f};                        // kConstant
   std::shared_ptr<const Image> bitmap;    // kBitmap: linear RGB, 3 channels
+  TextureFilter filter = TextureFilter::kBilinear;  // kBitmap
+  TextureWrap wrap = TextureWrap::kRepeat;          // kBitmap
   Rgb color0{0.4f}, color1{0.2f};         // kCheckerboard (Mitsuba defaults)
   UvTransform to_uv;
 

@@ -19,18 +19,20 @@ squared mean (relMSE's form) and averaged over the image without its noisiest
 1 % of pixels; gdvr fails where its figure exceeds Mitsuba's by more than
 --variance-ratio.
 
-With --integrators, the same scene also goes through gdvr's gradient-domain
+With --integrators N, every N-th scene also goes through gdvr's gradient-domain
 integrators (G-PT with each spatial shift and L2 reconstruction, T-GPT on a
 static three-frame shot) and their block means are compared with gdvr PT's
 the same way: every integrator must converge to the same image.
 
-Mitsuba is imported from the running interpreter (a venv with `mitsuba`;
-tests/CMakeLists.txt makes one from PyPI). Prints one line per scene and the
+Mitsuba is imported from the running interpreter; with --venv DIR, an
+interpreter without it makes DIR a venv, installs Mitsuba 3 from PyPI there
+(once) and runs this script under it (tests/CMakeLists.txt does so under the
+build folder). No Mitsuba and no PyPI is a failure, not a skip. Prints one line per scene and the
 worst cases with their seeds; writes a JSON report with --report. Exit code 1
 if any scene failed.
 
   python3 tests/differential/differential_test.py --render build/core/gdvr-render --seeds 0-499 \\
-      --report docs/differential_campaign.json
+      --integrators 5 --venv build/mitsuba-venv --report differential.json
   python3 tests/differential/differential_test.py --render build/core/gdvr-render --seeds 17 --keep /tmp/s17
 """
 import argparse
@@ -118,8 +120,36 @@ def variance_ratio(g_runs, m_runs, trim=0.01):
     return (rg / rm if rm > 0 else (1.0 if rg == 0 else float("inf"))), rg, rm
 
 
+MITSUBA_PACKAGES = ["mitsuba==3.9.1", "numpy"]
+
+
+def reexec_in_venv(venv):
+    """Runs this script under `venv`'s python, making the venv first."""
+    python = os.path.join(venv, "bin", "python")
+    if not os.path.exists(python):
+        r = subprocess.run([sys.executable, "-m", "venv", venv])
+        if r.returncode != 0:
+            sys.exit("cannot make a venv at %s (package python3-venv)" % venv)
+    check = subprocess.run([python, "-c", "import mitsuba, numpy"], capture_output=True)
+    if check.returncode != 0:
+        r = subprocess.run([python, "-m", "pip", "install", "--quiet", *MITSUBA_PACKAGES])
+        if r.returncode != 0:
+            sys.exit("pip install %s into %s failed (no PyPI?)" % (" ".join(MITSUBA_PACKAGES), venv))
+    argv = [python, os.path.abspath(__file__)]
+    skip = False
+    for a in sys.argv[1:]:  # drop --venv DIR: the child must not loop
+        if skip:
+            skip = False
+        elif a == "--venv":
+            skip = True
+        elif not a.startswith("--venv="):
+            argv.append(a)
+    os.execv(python, argv)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--venv", help="where to make a venv with Mitsuba 3 if this interpreter lacks it")
     ap.add_argument("--render", required=True, help="the gdvr-render executable")
     ap.add_argument("--seeds", default="0-9")
     ap.add_argument("--spp", type=int, default=16)
@@ -129,13 +159,19 @@ def main():
     ap.add_argument("--z", type=float, default=6.0)
     ap.add_argument("--floor", type=float, default=1e-3)
     ap.add_argument("--variance-ratio", type=float, default=1.5)
-    ap.add_argument("--integrators", action="store_true", help="also G-PT (every shift) and T-GPT against PT")
+    ap.add_argument("--integrators", type=int, default=0, metavar="N",
+                    help="every N-th scene (by seed) also goes through G-PT (every shift) and T-GPT against PT")
     ap.add_argument("--report", help="write a JSON report here")
     ap.add_argument("--keep", help="keep the generated scenes under this folder")
     ap.add_argument("--time-limit", type=float, default=0, help="stop starting new scenes after this many seconds")
     args = ap.parse_args()
 
-    import mitsuba as mi
+    try:
+        import mitsuba as mi
+    except ImportError:
+        if not args.venv:
+            sys.exit("Mitsuba 3 is not importable here; pass --venv DIR to install it from PyPI")
+        reexec_in_venv(args.venv)
     mi.set_variant("scalar_rgb")
     mi.set_log_level(mi.LogLevel.Error)
 
@@ -165,7 +201,7 @@ def main():
             ratio, g_rel, m_rel = variance_ratio(g_runs, m_runs)
             entry["variance"] = {"ratio": ratio, "gdvr": g_rel, "mitsuba": m_rel}
             ok = abs(entry["mitsuba"]["z"]) <= args.z and ratio <= args.variance_ratio
-            if args.integrators:
+            if args.integrators and seed % args.integrators == 0:
                 entry["integrators"] = {}
                 variants = [("gpt_replay", ["--integrator", "gpt", "--shift", "replay", "--recon", "l2"]),
                             ("gpt_reconnect", ["--integrator", "gpt", "--shift", "reconnect", "--recon", "l2"]),
