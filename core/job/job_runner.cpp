@@ -375,19 +375,21 @@ namespace {
 // corrupted farm file must not put NaN into the final image). Returns how
 // many values were dropped.
 //
-// The sum is clamped at 0: a least-squares solve rings around an outlier
-// gradient (a glossy firefly) with negative lobes, and negative radiance is
-// never the answer, so the clamp moves every such pixel closer to any
-// reference (veach-mis, G-PT L2 at 32 spp: 8921 negative values, per-pixel
-// relMSE 1.65 -> 0.87; docs/reconstruction.md).
-int64_t add_direct_clamped(const Image& direct, Image* final_image) {
+// With `clamp`, the sum is clamped at 0: a least-squares solve rings around an
+// outlier gradient (a glossy firefly) with negative lobes, and negative
+// radiance is never the answer, so the clamp moves every such pixel closer to
+// any reference (veach-mis, G-PT L2 at 32 spp: 8921 negative values, per-pixel
+// relMSE 1.65 -> 0.87; docs/reconstruction.md). It makes the estimate
+// consistent rather than unbiased (the mean of dark pixels rises), so jobs
+// can turn it off (reconstruction.clamp_negative).
+int64_t add_direct_clamped(const Image& direct, bool clamp, Image* final_image) {
   int64_t bad = 0;
   for (size_t k = 0; k < final_image->data().size(); ++k) {
     const float d = direct.data()[k];
     float& v = final_image->data()[k];
     if (std::isfinite(d)) v += d;
     else ++bad;
-    v = std::max(v, 0.0f);
+    if (clamp) v = std::max(v, 0.0f);
   }
   return bad;
 }
@@ -428,7 +430,7 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
   auto solved = cache->reconstruct(pos, layers_at, &recon_stats);
   if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
   Image final_image = std::move(solved.value());
-  const int64_t bad_direct = add_direct_clamped(direct->image, &final_image);
+  const int64_t bad_direct = add_direct_clamped(direct->image, job.reconstruction.clamp_negative, &final_image);
 
   FrameOutput out;
   out.frame = frame;
@@ -533,7 +535,7 @@ Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::m
   auto solved = reconstruct_frame(gf, recon);
   if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
   Image final_image = std::move(solved->frames.front());
-  const int64_t bad_direct = add_direct_clamped(*layer("direct"), &final_image);
+  const int64_t bad_direct = add_direct_clamped(*layer("direct"), job.reconstruction.clamp_negative, &final_image);
   if (bad_direct > 0)
     out.stats.left_out.push_back(std::to_string(bad_direct) + " non-finite direct-light values dropped");
   out.image.add("", {"R", "G", "B"}, std::move(final_image));

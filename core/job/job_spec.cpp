@@ -335,11 +335,12 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   if (j.contains("reconstruction")) {
     const json& rj = j["reconstruction"];
     std::string rp = p + ".reconstruction";
-    GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"method", "alpha", "window", "term_weights"}));
+    GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"method", "alpha", "window", "term_weights", "clamp_negative"}));
     ReconstructionSpec& rs = job.reconstruction;
     GDVR_RETURN_IF_ERROR(r.opt(rj, "method", rp, &rs.method));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "alpha", rp, &rs.alpha));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "window", rp, &rs.window));
+    GDVR_RETURN_IF_ERROR(r.opt(rj, "clamp_negative", rp, &rs.clamp_negative));
     if (rj.contains("term_weights") && !rj["term_weights"].is_null() &&
         !(rj["term_weights"].is_array() && rj["term_weights"].empty())) {  // protobuf JSON: [] or absent = unset
       GDVR_RETURN_IF_ERROR(r.get_vec(rj["term_weights"], rp + ".term_weights", 6, &rs.term_weights));
@@ -423,7 +424,8 @@ std::string job_to_json(const JobSpec& job) {
   j["temporal_shift"] = job.temporal_shift;
   j["reconstruction"] = {{"method", job.reconstruction.method},
                          {"alpha", job.reconstruction.alpha},
-                         {"window", job.reconstruction.window}};
+                         {"window", job.reconstruction.window},
+                         {"clamp_negative", job.reconstruction.clamp_negative}};
   if (!job.reconstruction.term_weights.empty()) j["reconstruction"]["term_weights"] = job.reconstruction.term_weights;
   j["direct_light"] = json::object();
   if (job.direct_light.strata >= 0) j["direct_light"]["strata"] = job.direct_light.strata;

@@ -21,6 +21,9 @@ struct ReconstructionSpec {
   // Extra weight per term (primal, dx, dy, dt, dxdt, dydt); empty = all 1.
   // 0 drops a term (e.g. {1, 1, 1, 0, 0, 0}: a window without temporal terms).
   std::vector<double> term_weights;
+  // The gradient-domain integrators' output clamped at 0 (job_runner.cpp):
+  // lower error per frame, but a mean biased upwards where the image is dark.
+  bool clamp_negative = true;
 };
 
 // Emitters seen directly (core/render/direct_emission.h); -1 = the

@@ -36,7 +36,7 @@ int usage(const char* msg) {
                "usage: gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]\n"
                "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
                "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
-               "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W]\n"
+               "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--keep-negative]\n"
                "       [--param NAME=VALUE ...]\n"
                "Flags override the job file; values are checked with the job (errors name the field).\n");
   return 2;
@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   bool have_frames = false;
   JobSpec overrides;
   int threads = 0;
-  bool seed_set = false, integrator_set = false, alpha_set = false;
+  bool seed_set = false, integrator_set = false, alpha_set = false, keep_negative = false;
   std::string shift, temporal_shift, recon;
   int window = 0;
   std::map<std::string, std::string> params;
@@ -90,6 +90,7 @@ int main(int argc, char** argv) {
     else if (a == "--shift") shift = next("--shift");
     else if (a == "--temporal-shift") temporal_shift = next("--temporal-shift");
     else if (a == "--recon") recon = next("--recon");
+    else if (a == "--keep-negative") keep_negative = true;
     else if (a == "--alpha") {
       const char* text = next("--alpha");
       char* end = nullptr;
@@ -142,6 +143,7 @@ int main(int argc, char** argv) {
   if (!recon.empty()) job.reconstruction.method = recon;
   if (alpha_set) job.reconstruction.alpha = overrides.reconstruction.alpha;
   if (window > 0) job.reconstruction.window = window;
+  if (keep_negative) job.reconstruction.clamp_negative = false;
   for (auto& [k, val] : params) job.params[k] = val;
 
   std::error_code ec;
