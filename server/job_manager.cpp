@@ -1,7 +1,5 @@
 #include "server/job_manager.h"
 
-#include <google/protobuf/util/json_util.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,10 +9,10 @@
 #include <sstream>
 #include <thread>
 
+#include "core/io/atomic_file.h"
 #include "core/io/image_io.h"
-#include "core/report/error_metrics.h"
+#include "core/job/job_outputs.h"
 #include "core/util/path_confinement.h"
-#include "server/job_outputs.h"
 #include "server/log.h"
 #include "server/status_map.h"
 #include "server/translate.h"
@@ -91,12 +89,6 @@ bool write_file_atomic(const std::string& path, const std::string& data) {
 
 }  // namespace
 
-std::string frame_file_name(int frame) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "frame_%04d.exr", frame);
-  return buf;
-}
-
 JobManager::JobManager(ServerConfig config, std::unique_ptr<JobStore> store)
     : config_(std::move(config)), store_(std::move(store)) {}
 
@@ -145,7 +137,7 @@ Status JobManager::validate(const v1::JobSpec& spec, JobSpec* core_job, std::vec
   opts.base_dir = config_.asset_root;
   opts.asset_root = config_.asset_root;
   GDVR_RETURN_IF_ERROR(validate_job(*core, opts));
-  GDVR_RETURN_IF_ERROR(JobOutputs::validate(*core, config_.ocio_config, config_.asset_root, parsed->front()));
+  GDVR_RETURN_IF_ERROR(JobOutputs::validate(*core, {config_.ocio_config, config_.asset_root}, parsed->front()));
   if (core_job) *core_job = std::move(*core);
   if (frames) *frames = std::move(*parsed);
   return Status::Ok();
@@ -399,37 +391,26 @@ void JobManager::run(Job* job) {
   // Previews, video and relMSE. A fresh encoder per run: see job_outputs.h
   // for why that keeps the video whole across kill -9 and restart.
   std::unique_ptr<JobOutputs> outputs;
-  if (auto o = JobOutputs::open(job->core, job->frames, dir, config_.ocio_config, config_.asset_root); o.ok())
+  if (auto o = JobOutputs::open(job->core, job->frames, dir, {config_.ocio_config, config_.asset_root}); o.ok())
     outputs = std::move(*o);
   else
     frame_error = o.status();
   JobCallbacks cb;
   cb.on_frame_final = [&](const FrameOutput& out) {
     if (!frame_error.ok()) return;
-    std::string name = frame_file_name(out.frame);
-    std::string path = dir + "/" + name;
-    Status st = write_exr(path, out.image);  // atomic: temporary file + rename
-    if (!st.ok()) return fail_run(st.with_context("writing " + path + ": "));
+    // The EXR and its preview are written before the frame is persisted, so
+    // every frame a restart treats as final has its preview too.
+    auto written = outputs->write_frame(out);
+    if (!written.ok()) return fail_run(written.status().with_context("frame " + std::to_string(out.frame) + " outputs: "));
+    const std::string name = written->file;
     FrameRecord rec;
     rec.file = name;
-    rec.size = uint64_t(fs::file_size(path, ec));
-    to_proto(out.stats, &rec.stats);
-    rec.stats.set_frame(out.frame);
-    // The preview is written before the frame is persisted, so every frame a
-    // restart treats as final has its preview too.
-    JobOutputs::FrameErrors errors;
-    std::vector<std::string> notes;
-    st = outputs->prepare_frame(out.frame, out.image, &errors, &notes);
-    if (!st.ok()) return fail_run(st.with_context("frame " + std::to_string(out.frame) + " outputs: "));
-    rec.stats.set_rel_mse(errors.rel_mse);
-    rec.stats.set_rel_mse_global(errors.rel_mse_global);
-    const ImageLayer* failures = out.image.find("shift_failure_rate");
-    rec.stats.set_shift_failure_rate(failures ? mean_finite(failures->image) : -1.0);
-    for (auto& n : notes) rec.stats.add_left_out(n);
+    rec.size = written->bytes;
+    to_proto(written->stats, &rec.stats);
     // Persist before announcing: a watcher must never be told about a frame
     // that a restart would forget.
     StoredFrame sf{out.frame, name, rec.size, rec.stats.SerializeAsString()};
-    st = store_->insert_frame(job->id, sf);
+    Status st = store_->insert_frame(job->id, sf);
     if (!st.ok()) return fail_run(st);
     {
       std::lock_guard<std::mutex> lock(mu_);
@@ -520,23 +501,12 @@ Status JobManager::persist_state_locked(const Job& job) {
 void JobManager::write_stats_json(const Job& job) const {
   std::error_code ec;
   if (!fs::is_directory(job_dir(job.id), ec)) return;
-  google::protobuf::util::JsonPrintOptions opts;
-  opts.preserve_proto_field_names = true;
-  opts.always_print_primitive_fields = true;
-  std::string out = "{\n  \"job_id\": \"" + job.id + "\",\n  \"state\": \"" + state_name(job.state) +
-                    "\",\n  \"frames_total\": " + std::to_string(job.frames.size()) +
-                    ",\n  \"frames_final\": " + std::to_string(job.final_frames.size()) + ",\n  \"frames\": [";
-  double total_s = 0;
-  bool first = true;
-  for (const auto& [f, rec] : job.final_frames) {
-    std::string js;
-    (void)google::protobuf::util::MessageToJsonString(rec.stats, &js, opts);
-    out += (first ? "\n    " : ",\n    ") + js;
-    first = false;
-    total_s += rec.stats.render_seconds();
-  }
-  out += "\n  ],\n  \"total_render_seconds\": " + std::to_string(total_s) + "\n}\n";
-  (void)write_file_atomic(job_dir(job.id) + "/stats.json", out);
+  std::vector<WrittenFrame> frames;
+  for (const auto& [f, rec] : job.final_frames) frames.push_back({rec.file, rec.size, from_proto(rec.stats)});
+  std::vector<std::pair<std::string, std::string>> header = {
+      {"job_id", job.id}, {"integrator", job.core.integrator}, {"state", state_name(job.state)}};
+  if (!job.reason.empty()) header.push_back({"reason", job.reason});
+  (void)write_text_atomic(job_dir(job.id) + "/stats.json", stats_json(header, int(job.frames.size()), frames));
 }
 
 int JobManager::queue_position_locked(const Job& job) const {

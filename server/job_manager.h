@@ -109,6 +109,4 @@ class JobManager {
   std::vector<std::thread> workers_;
 };
 
-std::string frame_file_name(int frame);
-
 }  // namespace gdvr::server

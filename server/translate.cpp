@@ -75,6 +75,26 @@ void to_proto(const FrameStats& s, v1::FrameStats* out) {
   out->set_rays_per_second(s.rays_per_second);
   for (const auto& l : s.left_out) out->add_left_out(l);
   out->set_rel_mse(s.rel_mse);
+  out->set_rel_mse_global(s.rel_mse_global);
+  out->set_shift_failure_rate(s.shift_failure_rate);
+}
+
+FrameStats from_proto(const v1::FrameStats& s) {
+  FrameStats out;
+  out.frame = s.frame();
+  out.render_seconds = s.render_seconds();
+  out.reconstruct_seconds = s.reconstruct_seconds();
+  out.spp = s.spp();
+  out.samples = s.samples();
+  out.rays = s.rays();
+  out.temporal_rays = s.temporal_rays();
+  out.samples_per_second = s.samples_per_second();
+  out.rays_per_second = s.rays_per_second();
+  out.left_out.assign(s.left_out().begin(), s.left_out().end());
+  out.rel_mse = s.rel_mse();
+  out.rel_mse_global = s.rel_mse_global();
+  out.shift_failure_rate = s.shift_failure_rate();
+  return out;
 }
 
 void to_proto(const JobProgress& p, v1::Progress* out) {

@@ -19,6 +19,7 @@ Expected<v1::JobSpec> job_spec_from_json(const std::string& json_text, const std
 Expected<JobSpec> to_core_job(const v1::JobSpec& spec);
 
 void to_proto(const FrameStats& stats, v1::FrameStats* out);
+FrameStats from_proto(const v1::FrameStats& stats);
 void to_proto(const JobProgress& progress, v1::Progress* out);
 
 }  // namespace gdvr::server

@@ -1,4 +1,4 @@
-// Atomic output files: writers produce "<path>.tmp.<pid>" and rename it over
+// Atomic output files: writers produce "<path>.tmp.<host>.<pid>" and rename it over
 // `path` only once it is complete, so a reader (the server streaming frames,
 // a resumed job) never sees a half-written EXR, PNG or video.
 #pragma once
@@ -9,12 +9,17 @@
 
 namespace gdvr {
 
-// "<path>.tmp.<pid>": same directory as `path`, so the rename stays within
-// one file system and is atomic.
+// "<path>.tmp.<host>.<pid>": same directory as `path`, so the rename stays
+// within one file system and is atomic; the host keeps two machines writing
+// one frame on shared storage (a farm retry racing the attempt it replaces)
+// from sharing a temporary.
 std::string temporary_path_for(const std::string& path);
 
 // Renames `tmp` over `path`; on failure removes `tmp` and names both files.
 Status commit_temporary(const std::string& tmp, const std::string& path);
+
+// Writes `text` to `path` through a temporary file.
+Status write_text_atomic(const std::string& path, const std::string& text);
 
 // Best-effort removal of a temporary left by a failed write.
 void discard_temporary(const std::string& tmp);

@@ -30,7 +30,10 @@ struct FrameStats {
   double samples_per_second = 0;
   double rays_per_second = 0;
   std::vector<std::string> left_out;  // what the pipeline skipped, and why
-  double rel_mse = -1;                 // against the job's reference, when present
+  // Filled by the output stage (core/job/job_outputs.h):
+  double rel_mse = -1;             // per-pixel relMSE against the job's reference; -1: none
+  double rel_mse_global = -1;      // global relMSE against it; -1: none
+  double shift_failure_rate = -1;  // mean of the shift_failure_rate layer; -1: not gradient-domain
 };
 
 struct FrameOutput {

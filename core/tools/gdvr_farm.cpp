@@ -20,6 +20,7 @@
 // 130 cancelled (SIGINT/SIGTERM, as on farm pre-emption).
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -39,10 +40,8 @@
 #include <vector>
 
 #include "core/io/atomic_file.h"
-#include "core/io/color_transform.h"
-#include "core/io/shipped_ocio_config.h"
 #include "core/io/image_io.h"
-#include "core/io/video_encoder.h"
+#include "core/job/job_outputs.h"
 #include "core/job/job_runner.h"
 #include "core/job/job_spec.h"
 #include "core/tools/cli_args.h"
@@ -97,8 +96,9 @@ std::string numbered(const char* pattern, int frame) {
 }
 std::string buffers_exr_name(int frame) { return numbered("buffers_%04d.exr", frame); }
 std::string buffers_json_name(int frame) { return numbered("buffers_%04d.json", frame); }
-std::string frame_exr_name(int frame) { return numbered("frame_%04d.exr", frame); }
-std::string preview_name(int frame) { return numbered("preview_%04d.png", frame); }
+// A finalized frame's stats.json entry, kept beside the buffers (which every
+// task shares) so the last finalize lists the whole job's frames.
+std::string final_stats_name(int frame) { return numbered("final_%04d.json", frame); }
 
 // "0-5,7,9-11": the compact render-farm form of a sorted frame list.
 std::string format_frames(const std::vector<int>& frames) {
@@ -156,12 +156,6 @@ Status write_exr_shared(const std::string& path, const LayeredImage& image) {
   return commit_temporary(staged, path);
 }
 
-Status write_png_shared(const std::string& path, const Image& display) {
-  const std::string staged = staging_path_for(path);
-  GDVR_RETURN_IF_ERROR(write_png8(staged, display));
-  return commit_temporary(staged, path);
-}
-
 Status write_text_shared(const std::string& path, const std::string& text) {
   const std::string staged = staging_path_for(path);
   {
@@ -184,15 +178,18 @@ void remove_own_stale_staging(const std::string& dir) {
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
-    // ".<file>.<host>.<pid>.staging" (+ ".tmp.<pid>" while core writes it)
+    // ".<file>.<host>.<pid>.staging" (+ ".tmp.<host>.<pid>" while core writes
+    // it), or core's own "<file>.tmp.<host>.<pid>" (the output stage's frames
+    // and previews).
     const std::string marker = "." + host + ".";
-    if (name.empty() || name[0] != '.' || name.find(".staging") == std::string::npos) continue;
+    const bool staging = !name.empty() && name[0] == '.' && name.find(".staging") != std::string::npos;
+    const bool core_temporary = name.find(".tmp" + marker) != std::string::npos;
+    if (!staging && !core_temporary) continue;
     size_t at = name.rfind(marker);
     if (at == std::string::npos) continue;
     long long pid = 0;
-    size_t pid_begin = at + marker.size(), pid_end = name.find('.', pid_begin);
-    if (pid_end == std::string::npos || !parse_int(name.substr(pid_begin, pid_end - pid_begin), 1, INT_MAX, &pid))
-      continue;
+    size_t pid_begin = at + marker.size(), pid_end = std::min(name.find('.', pid_begin), name.size());
+    if (!parse_int(name.substr(pid_begin, pid_end - pid_begin), 1, INT_MAX, &pid)) continue;
     if (pid == getpid()) continue;
     if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to judge)
     fs::remove(entry.path(), ec);
@@ -284,34 +281,13 @@ Expected<std::vector<int>> select_frames(const FarmJob& job, const FrameSelectio
 
 // ---- Buffer files ----
 
-json stats_to_json(const FrameStats& s) {
-  return {{"frame", s.frame},
-          {"render_seconds", s.render_seconds},
-          {"reconstruct_seconds", s.reconstruct_seconds},
-          {"spp", s.spp},
-          {"samples", s.samples},
-          {"rays", s.rays},
-          {"temporal_rays", s.temporal_rays},
-          {"samples_per_second", s.samples_per_second},
-          {"rays_per_second", s.rays_per_second},
-          {"left_out", s.left_out},
-          {"rel_mse", s.rel_mse}};
-}
+// A frame's render statistics, kept in its buffers marker: the stats.json
+// entry form (core/job/job_outputs.h) without a file.
+json stats_to_json(const FrameStats& s) { return json::parse(frame_entry_json({"", 0, s})); }
 
 FrameStats stats_from_json(const json& j) {
-  FrameStats s;
-  s.frame = j.value("frame", 0);
-  s.render_seconds = j.value("render_seconds", 0.0);
-  s.reconstruct_seconds = j.value("reconstruct_seconds", 0.0);
-  s.spp = j.value("spp", 0);
-  s.samples = j.value("samples", uint64_t(0));
-  s.rays = j.value("rays", uint64_t(0));
-  s.temporal_rays = j.value("temporal_rays", uint64_t(0));
-  s.samples_per_second = j.value("samples_per_second", 0.0);
-  s.rays_per_second = j.value("rays_per_second", 0.0);
-  s.left_out = j.value("left_out", std::vector<std::string>());
-  s.rel_mse = j.value("rel_mse", -1.0);
-  return s;
+  auto entry = parse_frame_entry(j.dump());
+  return entry.ok() ? entry->stats : FrameStats{};
 }
 
 enum class BufferState { kMissing, kComplete, kForeign };
@@ -433,22 +409,35 @@ Failure cmd_render(const FarmJob& job, const std::vector<int>& frames, const std
 
 // ---- finalize ----
 
-// The job's fps as the rational FFmpeg wants (NTSC rates exact), as the server does.
-void fps_rational(double fps, int* num, int* den) {
-  if (std::abs(fps - std::round(fps)) < 1e-6) {
-    *num = int(std::round(fps)), *den = 1;
-  } else if (double ntsc = fps * 1.001; std::abs(ntsc - std::round(ntsc)) < 1e-3) {
-    *num = int(std::round(ntsc)) * 1000, *den = 1001;
-  } else {
-    *num = int(std::round(fps * 1000)), *den = 1000;
+// stats.json in the output folder, as gdvr-render and the server write it:
+// every frame of the job that is final there (by this task or an earlier
+// one) with its statistics. Tasks finalizing chunks in parallel each write
+// what they see; the last one to finish lists all.
+Status write_job_stats(const FarmJob& job, const std::string& buffers_dir, const std::string& out_dir) {
+  std::vector<WrittenFrame> final_frames;
+  for (int f : job.frames) {
+    std::error_code ec;
+    const auto bytes = fs::file_size(fs::path(out_dir) / frame_file_name(f), ec);
+    if (ec) continue;  // not final yet
+    std::ifstream in(fs::path(buffers_dir) / final_stats_name(f), std::ios::binary);
+    std::stringstream text;
+    text << in.rdbuf();
+    auto entry = parse_frame_entry(text.str());
+    // A missing or stale entry (the frame was written again since) is left
+    // out rather than reported with the wrong figures.
+    if (entry.ok() && entry->stats.frame == f && entry->bytes == bytes) final_frames.push_back(entry.value());
   }
-}
-
-const Image* main_rgb(const LayeredImage& image) {
-  if (const ImageLayer* l = image.find("")) return &l->image;
-  for (const ImageLayer& l : image.layers)
-    if (l.image.channels() >= 3) return &l.image;
-  return nullptr;
+  const bool complete = final_frames.size() == job.frames.size();
+  const std::string text = stats_json(
+      {{"job", job.path}, {"integrator", job.spec.integrator}, {"state", complete ? "completed" : "partial"}},
+      int(job.frames.size()), final_frames);
+  // A rerun that finalizes nothing leaves the folder untouched, mtimes included.
+  const fs::path path = fs::path(out_dir) / "stats.json";
+  std::ifstream old(path, std::ios::binary);
+  std::stringstream old_text;
+  old_text << old.rdbuf();
+  if (old && old_text.str() == text) return Status::Ok();
+  return write_text_atomic(path.string(), text);
 }
 
 Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const std::string& buffers_dir,
@@ -462,7 +451,7 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
   // scheduled too early fails at once and names everything still missing.
   std::set<int> needed;
   for (int f : frames)
-    if (!fs::exists(fs::path(out_dir) / frame_exr_name(f), ec))
+    if (!fs::exists(fs::path(out_dir) / frame_file_name(f), ec))
       for (int n : frames_needed_to_finalize(job.spec, job.frames, f)) needed.insert(n);
   std::vector<std::string> missing;
   for (int n : needed) {
@@ -478,28 +467,18 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
     return fail(kExitMissingBuffers, msg);
   }
 
-  const bool previews = job.spec.outputs.previews;
-  std::unique_ptr<ColorTransform> transform;
-  std::unique_ptr<VideoEncoder> encoder;
-  VideoCodec codec = VideoCodec::kH264;
-  if (video && job.spec.outputs.video_codec == "none") {
+  // The job's output stage (core/job/job_outputs.h), as gdvr-render and the
+  // server use it; the video only where this task is asked for it (a task
+  // holding the whole range, usually the last step of a farm job).
+  JobSpec output_spec = job.spec;
+  if (video && output_spec.outputs.video_codec == "none")
     std::fprintf(stderr, "gdvr-farm finalize: job.outputs.video_codec is 'none': no video\n");
-    video = false;
-  }
-  if (video) {
-    auto c = parse_video_codec(job.spec.outputs.video_codec);
-    if (!c.ok()) return fail(c.status().with_context(job.path + ": job.outputs.video_codec: "));
-    codec = c.value();
-  }
-  if (previews || video) {
-    ColorTransformOptions o;
-    o.config_path = !ocio_flag.empty() ? ocio_flag : resolve_ocio_config_path(find_shipped_ocio_config());
-    o.display = job.spec.outputs.ocio_display;
-    o.view = job.spec.outputs.ocio_view;
-    auto t = ColorTransform::create(o);
-    if (!t.ok()) return fail(t.status().with_context("OCIO: "));
-    transform = std::make_unique<ColorTransform>(std::move(t.value()));
-  }
+  if (!video) output_spec.outputs.video_codec = "none";
+  const JobOutputs::Options output_options{ocio_flag, fs::path(job.path).parent_path().string()};
+  if (Status st = JobOutputs::validate(output_spec, output_options, frames.front()); !st.ok())
+    return fail(st.with_context(job.path + ": "));
+  auto outputs = JobOutputs::open(output_spec, frames, out_dir, output_options);
+  if (!outputs.ok()) return fail(outputs.status().with_context(job.path + ": "));
 
   // Buffers stay loaded while a later frame of this run still needs them
   // (the temporal window slides over neighbouring frames).
@@ -515,12 +494,11 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
   int finalized = 0, skipped = 0;
   for (int f : frames) {
     if (g_cancel) return fail(cancelled("cancelled"));
-    const std::string exr_path = (fs::path(out_dir) / frame_exr_name(f)).string();
-    const std::string png_path = (fs::path(out_dir) / preview_name(f)).string();
-    LayeredImage image;
-    bool have_image = false;
-    if (fs::exists(exr_path, ec)) {
+    if (fs::exists(fs::path(out_dir) / frame_file_name(f), ec)) {
+      // Finalized by an earlier (perhaps killed) run: its preview and video
+      // frame come from the EXR as written, so they are the same either way.
       ++skipped;
+      if (Status st = outputs.value()->complete_earlier_frame(f); !st.ok()) return fail(st);
     } else {
       for (int n : frames_needed_to_finalize(job.spec, job.frames, f)) {
         if (loaded.count(n)) continue;
@@ -532,56 +510,26 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
       }
       auto out = finalizer.value()->finalize(f, loaded);
       if (!out.ok()) return fail(out.status());
-      Status st = write_exr_shared(exr_path, out->image);
-      if (!st.ok()) return fail(st);
-      image = std::move(out->image);
-      have_image = true;
+      auto written = outputs.value()->write_frame(out.value());
+      if (!written.ok()) return fail(written.status());
+      if (Status st = write_text_shared((fs::path(buffers_dir) / final_stats_name(f)).string(),
+                                        frame_entry_json(written.value()) + "\n");
+          !st.ok())
+        return fail(st);
       ++finalized;
-      std::fprintf(stderr, "frame %d: reconstruct %.2f s -> %s\n", f, out->stats.reconstruct_seconds, exr_path.c_str());
+      std::fprintf(stderr, "frame %d: reconstruct %.2f s -> %s\n", f, out->stats.reconstruct_seconds,
+                   (fs::path(out_dir) / written->file).string().c_str());
       for (auto it = loaded.begin(); it != loaded.end();)
         it = last_use[it->first] <= f ? loaded.erase(it) : std::next(it);
     }
-
-    // Previews and video come from the frame as written, so a frame finalized
-    // by an earlier (perhaps killed) run gives the same PNG and video frame.
-    const bool need_preview = previews && !fs::exists(png_path, ec);
-    if (!need_preview && !video) continue;
-    if (!have_image) {
-      auto read = read_exr(exr_path);
-      if (!read.ok()) return fail(read.status());
-      image = std::move(read.value());
-    }
-    const Image* rgb = main_rgb(image);
-    if (!rgb) return fail(kExitFailed, exr_path + ": no RGB layer for the preview/video");
-    auto display = transform->apply(*rgb);
-    if (!display.ok()) return fail(display.status().with_context(exr_path + ": OCIO: "));
-    if (need_preview) {
-      Status st = write_png_shared(png_path, display.value());
-      if (!st.ok()) return fail(st);
-    }
-    if (video) {
-      if (!encoder) {
-        VideoEncoderOptions o;
-        o.codec = codec;
-        o.width = display->width();
-        o.height = display->height();
-        fps_rational(job.spec.fps, &o.fps_num, &o.fps_den);
-        const std::string path =
-            (fs::path(out_dir) / (std::string("video.") + default_video_extension(codec))).string();
-        auto enc = VideoEncoder::open(path, o);
-        if (!enc.ok()) return fail(enc.status());
-        encoder = std::move(enc.value());
-      }
-      Status st = encoder->add_frame(display.value());
-      if (!st.ok()) return fail(st.with_context("frame " + std::to_string(f) + ": video: "));
-    }
+    if (Status st = outputs.value()->add_to_video(f); !st.ok()) return fail(st.with_context("frame " + std::to_string(f) + ": "));
   }
-  if (encoder) {
-    Status st = encoder->close();
-    if (!st.ok()) return fail(st);
-    std::fprintf(stderr, "gdvr-farm finalize: %lld frame(s) -> %s\n", (long long)encoder->frames_written(),
-                 encoder->path().c_str());
-  }
+  auto video_name = outputs.value()->finish();
+  if (!video_name.ok()) return fail(video_name.status());
+  if (Status st = write_job_stats(job, buffers_dir, out_dir); !st.ok()) return fail(st);
+  if (!video_name->empty())
+    std::fprintf(stderr, "gdvr-farm finalize: %lld frame(s) -> %s\n", (long long)outputs.value()->video_frames(),
+                 (fs::path(out_dir) / video_name.value()).string().c_str());
   std::fprintf(stderr, "gdvr-farm finalize: %d frame(s) finalized, %d already final, in %s\n", finalized, skipped,
                out_dir.c_str());
   return {};

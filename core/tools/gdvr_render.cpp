@@ -2,7 +2,9 @@
 //   gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]
 //       [--frames A-B] [--threads N] [--seed N] [--integrator pt]
 //       [--width W --height H] [--param NAME=VALUE ...]
-// Writes DIR/frame_0000.exr ... and DIR/stats.json. Ctrl-C cancels cleanly.
+// Writes what the job's outputs block asks for, as the server and gdvr-farm
+// finalize do (core/job/job_outputs.h): DIR/frame_0000.exr ..., previews, the
+// video and stats.json. Ctrl-C cancels cleanly.
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -12,12 +14,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
-#include "core/io/image_io.h"
 #include "core/gradient/gpt_settings.h"
+#include "core/io/atomic_file.h"
+#include "core/job/job_outputs.h"
 #include "core/job/job_runner.h"
 #include "core/recon/recon_settings.h"
 #include "core/temporal/tgpt_settings.h"
@@ -43,12 +45,6 @@ int usage(const char* msg) {
 }
 
 using gdvr::tools::parse_int;
-
-std::string frame_name(int frame) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "frame_%04d.exr", frame);
-  return buf;
-}
 
 }  // namespace
 
@@ -153,14 +149,27 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
 
-  nlohmann::json stats = nlohmann::json::object();
-  stats["input"] = input;
-  stats["integrator"] = job.integrator;
-  stats["frames"] = nlohmann::json::array();
+  // The job's output stage (core/job/job_outputs.h): the same files the
+  // server and gdvr-farm finalize write for this job.
+  auto frame_list = parse_frame_range(job.frames);
+  if (!frame_list.ok()) { std::fprintf(stderr, "gdvr-render: job.frames: %s\n", frame_list.status().message().c_str()); return 1; }
+  JobOutputs::Options output_options;
+  output_options.asset_root = options.base_dir.empty() ? fs::current_path().string() : options.base_dir;
+  if (!frame_list->empty()) {
+    Status valid = JobOutputs::validate(job, output_options, frame_list->front());
+    if (!valid.ok()) { std::fprintf(stderr, "gdvr-render: %s\n", valid.to_string().c_str()); return 1; }
+  }
+  auto outputs = JobOutputs::open(job, *frame_list, out_dir, output_options);
+  if (!outputs.ok()) { std::fprintf(stderr, "gdvr-render: %s\n", outputs.status().to_string().c_str()); return 1; }
+
+  std::vector<WrittenFrame> written;
   Status write_status;
-  double total_seconds = 0;
-  uint64_t total_rays = 0, total_temporal_rays = 0, total_samples = 0;
-  std::map<std::string, int> left_out_totals;
+  auto write_stats = [&](const Status& st) {
+    std::vector<std::pair<std::string, std::string>> header = {{"input", input}, {"integrator", job.integrator},
+                                                               {"state", st.ok() ? "completed" : status_code_name(st.code())}};
+    if (!st.ok()) header.push_back({"reason", st.message()});
+    return write_text_atomic((fs::path(out_dir) / "stats.json").string(), stats_json(header, int(frame_list->size()), written));
+  };
 
   JobCallbacks callbacks;
   // Progress at most 4 times a second: a tile-level callback would flood logs.
@@ -174,31 +183,23 @@ int main(int argc, char** argv) {
     std::fflush(stderr);
   };
   callbacks.on_frame_final = [&](const FrameOutput& out) {
-    fs::path path = fs::path(out_dir) / frame_name(out.frame);
-    Status st = write_exr(path.string(), out.image);
-    if (!st.ok() && write_status.ok()) write_status = st;
-    const FrameStats& s = out.stats;
-    stats["frames"].push_back({{"frame", s.frame}, {"file", path.filename().string()}, {"render_seconds", s.render_seconds},
-                               {"spp", s.spp}, {"samples", s.samples}, {"rays", s.rays}, {"temporal_rays", s.temporal_rays},
-                               {"samples_per_second", s.samples_per_second}, {"rays_per_second", s.rays_per_second},
-                               {"left_out", s.left_out}});
-    total_seconds += s.render_seconds;
-    total_rays += s.rays;
-    total_temporal_rays += s.temporal_rays;
-    total_samples += s.samples;
-    for (const auto& l : s.left_out) left_out_totals[l]++;
+    if (!write_status.ok()) return;
+    auto w = outputs.value()->write_frame(out);
+    if (!w.ok()) { write_status = w.status(); return; }
+    if (Status st = outputs.value()->add_to_video(out.frame); !st.ok()) { write_status = st; return; }
+    written.push_back(*w);
+    const FrameStats& s = w->stats;
     std::fprintf(stderr, "\rframe %d: %.2f s, %d spp, %.2f Mrays/s -> %s\n", s.frame, s.render_seconds, s.spp,
-                 s.rays_per_second * 1e-6, path.string().c_str());
+                 s.rays_per_second * 1e-6, (fs::path(out_dir) / w->file).string().c_str());
   };
 
   Status st = run_job(job, options, callbacks, &g_cancel);
-  stats["total"] = {{"render_seconds", total_seconds}, {"rays", total_rays}, {"temporal_rays", total_temporal_rays},
-                    {"samples", total_samples},
-                    {"rays_per_second", total_seconds > 0 ? double(total_rays) / total_seconds : 0.0},
-                    {"left_out", left_out_totals}};
-  stats["status"] = st.ok() ? "completed" : status_code_name(st.code());
-  if (!st.ok()) stats["error"] = st.message();
-  std::ofstream(fs::path(out_dir) / "stats.json") << stats.dump(2) << "\n";
+  if (st.ok() && write_status.ok()) {
+    auto video = outputs.value()->finish();
+    if (!video.ok()) write_status = video.status();
+  }
+  outputs.value().reset();  // an unfinished encoder deletes its partial file
+  if (Status s = write_stats(st.ok() ? write_status : st); !s.ok() && write_status.ok()) write_status = s;
   if (!st.ok()) {
     std::fprintf(stderr, "\ngdvr-render: %s\n", st.to_string().c_str());
     return st.code() == StatusCode::kCancelled ? 130 : 1;
@@ -207,6 +208,6 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "gdvr-render: %s\n", write_status.to_string().c_str());
     return 1;
   }
-  std::fprintf(stderr, "gdvr-render: wrote %zu frame(s) to %s\n", stats["frames"].size(), out_dir.c_str());
+  std::fprintf(stderr, "gdvr-render: wrote %zu frame(s) to %s\n", written.size(), out_dir.c_str());
   return 0;
 }

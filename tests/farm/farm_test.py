@@ -129,6 +129,10 @@ def localhost(args):
             check((out / f"preview_{f:04d}.png").stat().st_size > 0, f"{integrator}: preview_{f:04d}.png written")
         video = out / "video.mp4"
         check(video.exists() and video.stat().st_size > 0, f"{integrator}: video.mp4 written")
+        stats = json.loads((out / "stats.json").read_text())
+        check(stats["state"] == "completed" and [f["frame"] for f in stats["frames"]] == list(range(6))
+              and all(f["render_seconds"] > 0 and f["file"] == f"frame_{f['frame']:04d}.exr" for f in stats["frames"]),
+              f"{integrator}: stats.json lists all 6 frames with their render times")
 
         # ---- idempotence: a rerun of any stage changes nothing ----
         before_buffers, before_out = snapshot(buffers), snapshot(out)

@@ -1,4 +1,5 @@
 #include "core/io/image_io.h"
+#include "core/io/atomic_file.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -43,7 +44,7 @@ TEST(ExrRoundTrip, MultiLayerOddSizeFloatIsExact) {
   img.add("albedo", {"Z", "A"}, ramp(7, 5, 2, 7.0f));  // deliberately non-sorted
   const std::string path = scratch("roundtrip.exr");
   ASSERT_TRUE(write_exr(path, img).ok());
-  EXPECT_FALSE(file_exists(path + ".tmp." + std::to_string(::getpid())));
+  EXPECT_FALSE(file_exists(temporary_path_for(path)));
 
   Expected<LayeredImage> back = read_exr(path);
   ASSERT_TRUE(back.ok()) << back.status().to_string();

@@ -1,4 +1,5 @@
 #include "core/io/video_encoder.h"
+#include "core/io/atomic_file.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -147,7 +148,7 @@ TEST_P(VideoEncoderCodecs, EncodesTenFramesWithTags) {
   const Status st = (*enc)->close();
   ASSERT_TRUE(st.ok()) << st.to_string();
   EXPECT_EQ((*enc)->frames_written(), 10);
-  EXPECT_FALSE(file_exists(path + ".tmp." + std::to_string(::getpid())));
+  EXPECT_FALSE(file_exists(temporary_path_for(path)));
 
   const Probe p = probe(path);
   EXPECT_EQ(p.codec, k.id);
@@ -257,7 +258,7 @@ TEST(VideoEncoder, ErrorsAndAbandonedFiles) {
     EXPECT_NE(wrong.message().find(path), std::string::npos) << wrong.message();
   }  // destroyed without close(): nothing left behind
   EXPECT_FALSE(file_exists(path));
-  EXPECT_FALSE(file_exists(path + ".tmp." + std::to_string(::getpid())));
+  EXPECT_FALSE(file_exists(temporary_path_for(path)));
 
   o.fps_den = 0;
   EXPECT_FALSE(VideoEncoder::open(path, o).ok());

@@ -1,16 +1,21 @@
-#include "server/job_outputs.h"
+#include "core/job/job_outputs.h"
 
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 
+#include <nlohmann/json.hpp>
+
+#include "core/io/atomic_file.h"
 #include "core/io/image_io.h"
+#include "core/io/shipped_ocio_config.h"
 #include "core/report/error_metrics.h"
 #include "core/util/path_confinement.h"
 
-namespace gdvr::server {
+namespace gdvr {
 namespace fs = std::filesystem;
 
 namespace {
@@ -20,7 +25,7 @@ bool wants_display(const JobSpec& job) { return job.outputs.previews || wants_vi
 
 ColorTransformOptions transform_options(const JobSpec& job, const std::string& ocio_config) {
   ColorTransformOptions o;
-  o.config_path = resolve_ocio_config_path(ocio_config);
+  o.config_path = resolve_ocio_config_path(ocio_config.empty() ? find_shipped_ocio_config() : ocio_config);
   if (!job.outputs.ocio_display.empty()) o.display = job.outputs.ocio_display;
   if (!job.outputs.ocio_view.empty()) o.view = job.outputs.ocio_view;
   return o;
@@ -42,13 +47,95 @@ Status with_field(const Status& st, const std::string& field) {
   return st.ok() ? st : Status(st.code(), field + ": " + st.message());
 }
 
-}  // namespace
-
-std::string preview_file_name(int frame) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "preview_%04d.png", frame);
+std::string numbered(const char* pattern, int frame) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, pattern, frame);
   return buf;
 }
+
+nlohmann::ordered_json frame_json(const WrittenFrame& r) {
+  const FrameStats& s = r.stats;
+  return {{"frame", s.frame},
+          {"file", r.file},
+          {"bytes", r.bytes},
+          {"render_seconds", s.render_seconds},
+          {"reconstruct_seconds", s.reconstruct_seconds},
+          {"spp", s.spp},
+          {"samples", s.samples},
+          {"rays", s.rays},
+          {"temporal_rays", s.temporal_rays},
+          {"samples_per_second", s.samples_per_second},
+          {"rays_per_second", s.rays_per_second},
+          {"rel_mse", s.rel_mse},
+          {"rel_mse_global", s.rel_mse_global},
+          {"shift_failure_rate", s.shift_failure_rate},
+          {"left_out", s.left_out}};
+}
+
+}  // namespace
+
+std::string frame_entry_json(const WrittenFrame& frame) { return frame_json(frame).dump(); }
+
+Expected<WrittenFrame> parse_frame_entry(const std::string& json_text) {
+  auto j = nlohmann::json::parse(json_text, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return invalid_argument("a frame's statistics are not a JSON object");
+  try {
+    WrittenFrame r;
+    r.file = j.value("file", std::string());
+    r.bytes = j.value("bytes", uint64_t(0));
+    FrameStats& s = r.stats;
+    s.frame = j.value("frame", 0);
+    s.render_seconds = j.value("render_seconds", 0.0);
+    s.reconstruct_seconds = j.value("reconstruct_seconds", 0.0);
+    s.spp = j.value("spp", 0);
+    s.samples = j.value("samples", uint64_t(0));
+    s.rays = j.value("rays", uint64_t(0));
+    s.temporal_rays = j.value("temporal_rays", uint64_t(0));
+    s.samples_per_second = j.value("samples_per_second", 0.0);
+    s.rays_per_second = j.value("rays_per_second", 0.0);
+    s.rel_mse = j.value("rel_mse", -1.0);
+    s.rel_mse_global = j.value("rel_mse_global", -1.0);
+    s.shift_failure_rate = j.value("shift_failure_rate", -1.0);
+    s.left_out = j.value("left_out", std::vector<std::string>());
+    return r;
+  } catch (const nlohmann::json::exception& e) {  // a field of the wrong type
+    return invalid_argument(std::string("a frame's statistics: ") + e.what());
+  }
+}
+
+std::string frame_file_name(int frame) { return numbered("frame_%04d.exr", frame); }
+
+std::string stats_json(const std::vector<std::pair<std::string, std::string>>& header, int frames_total,
+                       const std::vector<WrittenFrame>& frames) {
+  nlohmann::ordered_json j;
+  for (const auto& [k, v] : header) j[k] = v;
+  j["frames_total"] = frames_total;
+  j["frames_final"] = frames.size();
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  double render = 0, reconstruct = 0;
+  uint64_t rays = 0, temporal_rays = 0, samples = 0;
+  std::map<std::string, int> left_out;  // how many frames left each thing out
+  for (const WrittenFrame& r : frames) {
+    list.push_back(frame_json(r));
+    render += r.stats.render_seconds;
+    reconstruct += r.stats.reconstruct_seconds;
+    rays += r.stats.rays;
+    temporal_rays += r.stats.temporal_rays;
+    samples += r.stats.samples;
+    for (const auto& l : r.stats.left_out) left_out[l]++;
+  }
+  j["frames"] = std::move(list);
+  j["total"] = {{"render_seconds", render},
+                {"reconstruct_seconds", reconstruct},
+                {"samples", samples},
+                {"rays", rays},
+                {"temporal_rays", temporal_rays},
+                {"rays_per_second", render > 0 ? double(rays) / render : 0.0},
+                {"left_out", left_out}};
+  return j.dump(2) + "\n";
+}
+
+std::string preview_file_name(int frame) { return numbered("preview_%04d.png", frame); }
 
 std::string video_file_name(const std::string& codec) {
   auto c = parse_video_codec(codec);
@@ -85,8 +172,9 @@ void remove_stale_temporaries(const std::string& dir) {
   }
 }
 
-Status JobOutputs::validate(const JobSpec& job, const std::string& ocio_config, const std::string& asset_root,
-                            int first_frame) {
+Status JobOutputs::validate(const JobSpec& job, const Options& options, int first_frame) {
+  const std::string& ocio_config = options.ocio_config;
+  const std::string& asset_root = options.asset_root;
   if (wants_video(job)) GDVR_RETURN_IF_ERROR(with_field(parse_video_codec(job.outputs.video_codec).status(),
                                                        "outputs.video_codec"));
   if (wants_display(job)) {
@@ -118,20 +206,20 @@ Status JobOutputs::validate(const JobSpec& job, const std::string& ocio_config, 
 }
 
 Expected<std::unique_ptr<JobOutputs>> JobOutputs::open(const JobSpec& job, std::vector<int> frames, std::string dir,
-                                                       const std::string& ocio_config, std::string asset_root) {
+                                                       Options options) {
   std::unique_ptr<JobOutputs> out(new JobOutputs());
   out->job_ = job;
   out->frames_ = std::move(frames);
   out->dir_ = std::move(dir);
-  out->asset_root_ = std::move(asset_root);
+  out->options_ = std::move(options);
   if (wants_display(job)) {
-    auto t = ColorTransform::create(transform_options(job, ocio_config));
+    auto t = ColorTransform::create(transform_options(job, out->options_.ocio_config));
     if (!t.ok()) return with_field(t.status(), "outputs.ocio_display/ocio_view");
     out->transform_ = std::make_unique<ColorTransform>(std::move(*t));
   }
   if (wants_video(job)) out->video_name_ = video_file_name(job.outputs.video_codec);
   if (!job.reference.empty() && job.reference.find('%') == std::string::npos) {
-    auto ref = read_exr(reference_path(out->asset_root_, job.reference, 0));
+    auto ref = read_exr(reference_path(out->options_.asset_root, job.reference, 0));
     if (ref.ok() && main_rgb(*ref)) out->reference_ = std::make_unique<Image>(*main_rgb(*ref));
   }
   return Expected<std::unique_ptr<JobOutputs>>(std::move(out));
@@ -141,10 +229,20 @@ JobOutputs::~JobOutputs() = default;  // an unclosed encoder deletes its partial
 
 int64_t JobOutputs::video_frames() const { return video_ ? video_->frames_written() : 0; }
 
-Status JobOutputs::prepare_frame(int frame, const LayeredImage& image, FrameErrors* errors,
-                                 std::vector<std::string>* left_out) {
-  *errors = FrameErrors{};
-  const Image* rgb = main_rgb(image);
+Expected<WrittenFrame> JobOutputs::write_frame(const FrameOutput& out) {
+  const int frame = out.frame;
+  WrittenFrame rec;
+  rec.file = frame_file_name(frame);
+  rec.stats = out.stats;
+  rec.stats.frame = frame;
+  const std::string path = dir_ + "/" + rec.file;
+  GDVR_RETURN_IF_ERROR(write_exr(path, out.image).with_context("writing " + path + ": "));
+  std::error_code ec;
+  rec.bytes = uint64_t(fs::file_size(path, ec));
+  const ImageLayer* failures = out.image.find("shift_failure_rate");
+  rec.stats.shift_failure_rate = failures ? mean_finite(failures->image) : -1.0;
+
+  const Image* rgb = main_rgb(out.image);
   if (!rgb) return internal_error("frame " + std::to_string(frame) + " has no RGB layer");
   if (transform_) {
     auto display = transform_->apply(*rgb);
@@ -152,31 +250,51 @@ Status JobOutputs::prepare_frame(int frame, const LayeredImage& image, FrameErro
     pending_display_ = std::move(*display);
     pending_frame_ = frame;
     if (job_.outputs.previews) {
-      std::string path = dir_ + "/" + preview_file_name(frame);
-      GDVR_RETURN_IF_ERROR(write_png8(path, pending_display_).with_context("writing " + path + ": "));
+      std::string png = dir_ + "/" + preview_file_name(frame);
+      GDVR_RETURN_IF_ERROR(write_png8(png, pending_display_).with_context("writing " + png + ": "));
     }
   }
+  rec.stats.rel_mse = rec.stats.rel_mse_global = -1;
   if (!job_.reference.empty()) {
     std::unique_ptr<Image> per_frame;
     const Image* ref = reference_.get();
     if (!ref) {
-      auto img = read_exr(reference_path(asset_root_, job_.reference, frame));
+      auto img = read_exr(reference_path(options_.asset_root, job_.reference, frame));
       if (img.ok() && main_rgb(*img)) per_frame = std::make_unique<Image>(*main_rgb(*img));
       ref = per_frame.get();
     }
     if (!ref) {
-      left_out->push_back("relMSE: no readable reference for frame " + std::to_string(frame));
+      rec.stats.left_out.push_back("relMSE: no readable reference for frame " + std::to_string(frame));
     } else {
       auto sums = rel_mse_sums(*rgb, *ref);
       if (!sums.ok()) {
-        left_out->push_back("relMSE: " + sums.status().message());
+        rec.stats.left_out.push_back("relMSE: " + sums.status().message());
       } else {
-        errors->rel_mse = sums->per_pixel();
-        errors->rel_mse_global = sums->global();
+        rec.stats.rel_mse = sums->per_pixel();
+        rec.stats.rel_mse_global = sums->global();
       }
     }
   }
-  return Status::Ok();
+  return rec;
+}
+
+Expected<Image> JobOutputs::display_from_disk(int frame) {
+  const std::string path = dir_ + "/" + frame_file_name(frame);
+  auto img = read_exr(path);
+  if (!img.ok()) return img.status();
+  const Image* rgb = main_rgb(*img);
+  if (!rgb) return internal_error(path + " has no RGB layer");
+  return transform_->apply(*rgb);
+}
+
+Status JobOutputs::complete_earlier_frame(int frame) {
+  if (!job_.outputs.previews || !transform_) return Status::Ok();
+  const std::string png = dir_ + "/" + preview_file_name(frame);
+  std::error_code ec;
+  if (fs::exists(png, ec)) return Status::Ok();
+  auto display = display_from_disk(frame);
+  if (!display.ok()) return display.status().with_context("preview of frame " + std::to_string(frame) + ": ");
+  return write_png8(png, *display).with_context("writing " + png + ": ");
 }
 
 Status JobOutputs::encode(const Image& display) {
@@ -197,16 +315,9 @@ Status JobOutputs::encode(const Image& display) {
 
 Status JobOutputs::catch_up_before(int frame) {
   while (next_video_index_ < frames_.size() && frames_[next_video_index_] < frame) {
-    int f = frames_[next_video_index_];
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%04d.exr", f);
-    std::string path = dir_ + "/" + name;
-    auto img = read_exr(path);
-    if (!img.ok()) return img.status().with_context("video: re-encoding frame " + std::to_string(f) + ": ");
-    const Image* rgb = main_rgb(*img);
-    if (!rgb) return internal_error("video: " + path + " has no RGB layer");
-    auto display = transform_->apply(*rgb);
-    if (!display.ok()) return display.status();
+    const int f = frames_[next_video_index_];
+    auto display = display_from_disk(f);
+    if (!display.ok()) return display.status().with_context("video: re-encoding frame " + std::to_string(f) + ": ");
     GDVR_RETURN_IF_ERROR(encode(*display));
     ++next_video_index_;
   }
@@ -231,4 +342,4 @@ Expected<std::string> JobOutputs::finish() {
   return video_name_;
 }
 
-}  // namespace gdvr::server
+}  // namespace gdvr
