@@ -8,7 +8,7 @@
 
 namespace gdvr {
 
-// Solves the objective of REFERENCE.md §5 over all frames of the window with
+// Solves the objective of docs/reconstruction.md over all frames of the window with
 // settings.method. Invalid settings or buffers give kInvalidArgument; NaN/Inf
 // samples are dropped (counted in stats), never propagated to the output.
 Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings);

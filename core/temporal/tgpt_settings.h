@@ -1,5 +1,5 @@
 // Options of the temporal gradient-domain path tracer (T-GPT, Manzi et al.
-// 2016, REFERENCE.md §4, §5): the spatial G-PT options of each half pass, how
+// 2016; docs/tgpt.md): the spatial G-PT options of each half pass, how
 // temporal constraints follow motion, and the sliding-window reconstruction.
 // Validated once before a job; printable for logs.
 #pragma once
@@ -12,7 +12,7 @@
 
 namespace gdvr {
 
-// How the temporal gradient dt is sampled (REFERENCE.md §4):
+// How the temporal gradient dt is sampled (docs/tgpt.md):
 enum class TemporalShiftMapping {
   // replay: pass B of frame t and pass A of t+1 share their random numbers;
   // dt = A_{t+1} − B_t (the public T-GPT code).
@@ -33,7 +33,7 @@ struct TgptSettings {
 
   TemporalShiftMapping temporal_shift = TemporalShiftMapping::kReplay;
 
-  // ---- Motion vectors (primary-hit reprojection, REFERENCE.md §4) ----
+  // ---- Motion vectors (primary-hit reprojection, docs/tgpt.md "dt and motion") ----
   // Off: every temporal constraint is kept (same-pixel dt is unbiased anyway).
   bool motion_vectors = true;
   // Forward/backward consistency: |m_fwd(p) + m_bwd(p + m_fwd(p))| ≤ this, per
@@ -45,7 +45,7 @@ struct TgptSettings {
   // constraint is dropped (docs/tgpt.md, "dt and motion"). < 0: no limit.
   int max_same_pixel_motion_px = 1;
 
-  // ---- Sliding-window reconstruction (REFERENCE.md §5) ----
+  // ---- Sliding-window reconstruction (docs/reconstruction.md, "Sliding windows") ----
   ReconSettings recon;
   int window = 20;  // W ≥ 1; W = 1 is spatial G-PT
   int hop = 0;      // H, frames between window starts; 0 = max(1, W/2)
