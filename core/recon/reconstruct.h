@@ -1,5 +1,5 @@
 // Reconstruction entry point: a pure function from a window of sampled
-// buffers to images (STYLE.md: the reconstructor knows nothing of the renderer).
+// buffers to images (the reconstructor knows nothing of the renderer: docs/architecture.md).
 #pragma once
 
 #include "core/recon/gradient_window.h"

@@ -1,5 +1,5 @@
 // The named buffers of T-GPT and the temporal gradients made from them
-// (STYLE.md: named buffers, not magic indices).
+// (named buffers, not magic indices: docs/architecture.md).
 //
 // Stage 1 stores per frame (tgpt_frame_layers): both half passes
 // ("a_primal", "a_dx", "a_dy", "b_…", with "_var" variances), the averaged
