@@ -52,12 +52,12 @@ struct TgptSettings {
   int effective_hop() const { return hop > 0 ? hop : (window / 2 > 0 ? window / 2 : 1); }
 
   // G-PT's defaults for `shift`, but with cached-path Russian roulette off:
-  // docs/gpt.md measured that RR multiplies the gradient variance ~13× on cbox
-  // and that L2 at equal time is 1.6× better without it (0.00068 vs 0.00112);
+  // RR multiplies the gradient variance ~13× on cbox, and G-PT's L2 result at
+  // equal time is several times better without it (docs/benchmarks.md, G-PT);
   // T-GPT reconstructs with L2 by default and its dxdt, dydt inherit the
   // spatial gradients' noise. Per-pixel sub-pixel positions too: with the
   // shared position (GptSettings::shared_jitter) the demo shot's relMSE was
-  // 27 % higher at equal spp (0.00102 vs 0.00080, gdvr-bench-tgpt, 12-02),
+  // 27 % higher at equal spp (0.00102 vs 0.00080, gdvr-bench-tgpt),
   // more than the 4-14 % it saves in time: the two generations of a pair
   // share their first hits, and the anti-aliasing error, correlated between
   // neighbours, is low-frequency error the L2 solve takes from the primal.
