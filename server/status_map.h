@@ -1,4 +1,4 @@
-// The one place where core errors become gRPC statuses (STYLE.md).
+// The one place where core errors become gRPC statuses (docs/architecture.md).
 #pragma once
 
 #include <grpcpp/support/status.h>

@@ -32,7 +32,7 @@ struct RayHit {
 // against <embree3/rtcore_ray.h> in accelerator.cpp). A caller writes its
 // rays straight into the records and reads the answers from them: no staging
 // copy on either side of the query (leaving out the copies cut 2.2 % of the
-// path tracer's instructions on cbox; docs/foundation.md). The fields Embree
+// path tracer's instructions on cbox; docs/renderer.md). The fields Embree
 // only reads (time, mask, id, flags) are set once, here.
 class RayStreamBuffer {
  public:
@@ -103,8 +103,8 @@ enum class GeometrySet { kAll, kEmitters };
 // How a stream's rays relate to each other. kCoherent: nearly parallel rays
 // from nearly one point, such as a path batch's camera rays (the samples of a
 // few neighbouring pixels), which Embree then traces as packets that stay
-// together: 5-10 % less render time on the bundled scenes (docs/foundation.md,
-// eleventh round). For rays that part (every bounce, and shadow rays too) the
+// together: 5-10 % less render time on the bundled scenes (docs/renderer.md,
+// "Rays in streams"). For rays that part (every bounce, and shadow rays too) the
 // flag costs time, so kIncoherent is the default.
 enum class RayCoherence { kIncoherent, kCoherent };
 
@@ -138,7 +138,7 @@ class Accelerator {
   // rtcOccluded1M): Embree traces the stream in SIMD packets, switching to
   // single-ray traversal where the packet's rays part, which on the bundled
   // scenes is 5-40 % faster per ray than n single queries
-  // (docs/foundation.md). The answers are those of intersect() and
+  // (docs/renderer.md). The answers are those of intersect() and
   // occluded() (triangles bit for bit; a sphere's t to within an ulp or two,
   // as its packet kernel rounds differently). Occlusion streams test all
   // geometry (there is no instanced_only form). One exception: where two

@@ -8,8 +8,7 @@
 // inversion is a chain of about fifteen dependent transcendental calls, so
 // it is bound by their latency, not by instruction count: run one after the
 // other, inversions cost ~140 ns each on the development machine; stepped
-// side by side, ~75 ns, with the same bits (docs/foundation.md, thirteenth
-// round).
+// side by side, ~75 ns, with the same bits (docs/bsdf.md).
 #pragma once
 
 #include "core/math/vec.h"

@@ -1,7 +1,8 @@
-// The offset's bounce at a vertex where it does not reconnect (REFERENCE.md
-// §3.1, §3.2): replay the base's random numbers (hybrid shift), take the same
-// Dirac lobe, or copy the half vector of a glossy bounce. Shared by the
-// spatial cached shifts and the temporal path-space shift.
+// The offset's bounce at a vertex where it does not reconnect (Kettunen et al.
+// 2015; docs/gpt.md, "Shift mappings"): replay the base's random numbers
+// (hybrid shift), take the same Dirac lobe, or copy the half vector of a
+// glossy bounce. Shared by the spatial cached shifts and the temporal
+// path-space shift.
 #pragma once
 
 #include "core/bsdf/bsdf.h"

@@ -1,7 +1,8 @@
-// Options of the spatial gradient-domain path tracer (Kettunen et al. 2015,
-// REFERENCE.md §2, §3): which shift mapping builds the offsets, whether the
+// Options of the spatial gradient-domain path tracer (Kettunen et al. 2015;
+// docs/gpt.md): which shift mapping builds the offsets, whether the
 // offsets are built from the cached base path only with probability q
-// (§3.3), how vertices are classified, and how the frame is reconstructed.
+// (docs/gpt.md, "Cached-path Russian roulette"), how vertices are classified,
+// and how the frame is reconstructed.
 // Validated once before a frame; printable for logs.
 #pragma once
 

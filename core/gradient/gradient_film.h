@@ -1,5 +1,5 @@
 // Per-pixel accumulators of G-PT and the named buffers made from them
-// (STYLE.md: named buffers, not magic indices).
+// (named buffers, not magic indices: docs/architecture.md).
 //
 // Every base pixel owns the gradient estimates of its four offsets, so tiles
 // never write to a neighbour's pixel and the result does not depend on thread

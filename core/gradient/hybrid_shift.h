@@ -1,6 +1,7 @@
-// Hybrid shift (REFERENCE.md §3.2, as smallgdpt): random replay of the base's
-// random numbers until the first diffuse-diffuse pair, then reconnection,
-// with the pair MIS of §2 (replayed vertices contribute a ratio of 1).
+// Hybrid shift (docs/gpt.md, "Shift mappings"): random replay of the base's
+// random numbers until the first diffuse-diffuse pair, then reconnection
+// (Kettunen et al. 2015), with the balance-heuristic MIS of the pair
+// (replayed vertices contribute a ratio of 1).
 #pragma once
 
 #include "core/gradient/reconnection_shift.h"

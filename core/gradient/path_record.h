@@ -1,4 +1,5 @@
-// The cached base path of cached-path shifting (REFERENCE.md §3.3): every
+// The cached base path of cached-path shifting (docs/gpt.md, "Cached-path
+// Russian roulette"): every
 // vertex with its sampling decisions, pdfs and the random numbers that made
 // them, plus the base path's MIS-weighted contribution per technique. Offsets
 // are built from this record alone (no second look at the sampler), and an

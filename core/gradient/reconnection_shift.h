@@ -1,4 +1,5 @@
-// Shifts built from the cached base path (REFERENCE.md §3.1, §3.3):
+// Shifts built from the cached base path (Kettunen et al. 2015; docs/gpt.md,
+// "Shift mappings"):
 // - reconnection with half-vector copy: glossy/specular base vertices are
 //   followed by half-vector copy (Dirac lobes by the same lobe), and the
 //   offset reconnects to x_{k+1} once x_k, its offset vertex and x_{k+1} are

@@ -1,4 +1,5 @@
-// Random replay in primary sample space (REFERENCE.md §3.2): the offset is the
+// Random replay in primary sample space (Kelemen et al. 2002's space of random
+// numbers; docs/gpt.md, "Shift mappings"): the offset is the
 // path tracer run again in the neighbouring pixel with the base sample's own
 // random numbers. The shift has Jacobian 1 in primary sample space, so both
 // generations of a pair have the same density, the MIS weights are 1/2, and

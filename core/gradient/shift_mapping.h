@@ -1,5 +1,6 @@
 // What every shift mapping returns for one base path and one neighbour j, and
-// the balance-heuristic weight of a pair (REFERENCE.md §2): for each
+// the balance-heuristic weight of a pair (Kettunen et al. 2015; docs/gpt.md,
+// "Estimators"): for each
 // technique t of the base path (emitter sampling at x_k, or BSDF sampling at
 // x_k hitting emission at x_{k+1}) the shift gives the offset's contribution
 // c_o = f(T x)|J| / p(x) and the ratio r = p(T x)|J| / p(x), accumulated per

@@ -1,5 +1,7 @@
-// The path-space temporal shift of T-GPT (Manzi et al. 2016 §4; REFERENCE.md
-// §4: "reconnection into the moved scene with a Jacobian and MIS"): a base
+// The path-space temporal shift of T-GPT (docs/tgpt.md, "The path-space
+// temporal shift"): Kettunen et al. 2015's reconnection shift carried across
+// frames, with its Jacobian and MIS, as the alternative to the random replay
+// that Manzi et al. 2016 use for temporal gradients. A base
 // path of frame t, cached, is shifted into another frame t' (t ± 1) with its
 // scene, lights and camera at t'.
 //
@@ -13,7 +15,8 @@
 //            motion M (shape_motion.h), and every later vertex is carried the
 //            same way. The carried vertex's area Jacobian is 1 for rigid
 //            motions, so each carried segment contributes the reconnection
-//            factor (cos'_y/cos_y)(d²/d'²) of REFERENCE.md §3.1.
+//            factor (cos'_y/cos_y)(d²/d'²) of the spatial reconnection
+//            shift (docs/gpt.md, "Shift mappings").
 //
 // Unlike the spatial shift, the carried suffix is not shared with the base:
 // every segment is tested for visibility in frame t' (another object may have

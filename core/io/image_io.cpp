@@ -65,7 +65,7 @@ Status check_dimensions(const std::string& path, int64_t width, int64_t height) 
 // data window; its own limits stop a hostile header there. And it compresses
 // and decompresses one chunk of lines at a time on the calling thread unless
 // given a pool: with a thread per core, the farm's finalize (zlib 61 % of its
-// cycles) ran 1.4x faster, files byte-identical (docs/tgpt.md). Process-wide,
+// cycles) ran 1.4x faster, files byte-identical (docs/benchmarks.md). Process-wide,
 // but OpenEXR is only used through this file.
 void configure_openexr() {
   static std::once_flag once;

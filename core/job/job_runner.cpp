@@ -512,7 +512,8 @@ Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::m
     return out;
   }
   // Gradient-domain: reconstruct the indirect part; light seen directly from
-  // the camera is kept out of the solve and added after it (REFERENCE.md §1).
+  // the camera is kept out of the solve and added after it (docs/gpt.md,
+  // "Direct light").
   auto method = parse_recon_method(job.reconstruction.method);
   if (!method.ok()) return method.status().with_context("job.reconstruction.");
   ReconSettings recon = GptSettings::defaults_for(ShiftMapping::kReconnect).recon;

@@ -1,6 +1,7 @@
 // Small fixed-size vector and colour types used throughout the renderer.
 // Geometry is float (what Embree traces); pdf ratios and Jacobians use double
-// where the gradient-domain code needs them (REFERENCE.md §8).
+// where the gradient-domain code needs them: products of pdfs over long or
+// glossy paths under- and overflow in float (docs/stability.md).
 #pragma once
 
 #include <algorithm>

@@ -1,8 +1,9 @@
 // Which constraints of a window exist, per term and pixel, independent of the
 // colour channel. A constraint is dropped when it reaches outside the image or
-// window (REFERENCE.md §5), when the caller's mask drops it (failed motion
-// vectors, §4), or when its value or variance is NaN/Inf (or the variance is
-// negative) in any channel: one bad sample must never poison the solve.
+// window (docs/reconstruction.md, "Conventions"), when the caller's mask drops
+// it (failed motion vectors, docs/tgpt.md), or when its value or variance is
+// NaN/Inf (or the variance is negative) in any channel: one bad sample must
+// never poison the solve.
 #pragma once
 
 #include <array>

@@ -2,7 +2,7 @@
 // the spatial gradients and (optionally) the temporal and mixed gradients
 // towards the next frame, with optional per-pixel variances and validity masks.
 //
-// Conventions (REFERENCE.md §5): dx(p) ≈ I(p+e_x) − I(p), dy likewise,
+// Conventions (docs/reconstruction.md): dx(p) ≈ I(p+e_x) − I(p), dy likewise,
 // dt_t(p) ≈ I_{t+1}(p) − I_t(p), dxdt_t = dx_{t+1} − dx_t, dydt_t likewise.
 // Constraints that would reach outside the image (dx in the last column, dy in
 // the last row) or outside the window (temporal terms of its last frame) do not

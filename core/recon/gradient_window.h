@@ -1,4 +1,5 @@
-// W consecutive frames of one shot, solved together (REFERENCE.md §5). Frames
+// W consecutive frames of one shot, solved together (Manzi et al. 2016;
+// docs/reconstruction.md). Frames
 // are shared, not copied, so overlapping sliding windows reuse the buffers.
 #pragma once
 

@@ -1,4 +1,4 @@
-// L1 reconstruction (REFERENCE.md §5, p = 1) by iteratively reweighted least
+// L1 reconstruction (Kettunen et al. 2015; docs/reconstruction.md) by iteratively reweighted least
 // squares, as in the G-PT release: round k solves the weighted L2 problem with
 // per-constraint weights w = β / (|r| + ε_k), ε_k = ε_0 · decay^(k−1), where r
 // is the constraint's residual at the previous solution and β the term weight
@@ -72,7 +72,7 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
         sum += part.first;
         count += part.second;
       }
-      // ---- Renormalise to mean 1 (REFERENCE.md §8): the minimiser is scale
+      // ---- Renormalise to mean 1 (docs/stability.md): the minimiser is scale
       // invariant, but weights up to 1/ε_20 ≈ 2e7 would cost float precision
       // in the CG dot products.
       const float norm = (count > 0 && sum > 0) ? float(count / sum) : 1.0f;

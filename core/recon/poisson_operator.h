@@ -1,5 +1,6 @@
 // The matrix-free normal-equations operator of the (weighted) screened Poisson
-// objective of REFERENCE.md §5 over one channel of a window:
+// objective (Kettunen et al. 2015, with the temporal terms of Manzi et al.
+// 2016; docs/reconstruction.md) over one channel of a window:
 //
 //   E(x) = Σ_p w_primal(p) (x(p) − g(p))² + Σ_{term} Σ_p w_term(p) ((H_term x)(p) − d_term(p))²
 //   A = W_primal + Σ H_termᵀ W_term H_term,   b = W_primal g + Σ H_termᵀ W_term d_term.

@@ -1,5 +1,6 @@
 // Frequency-domain prediction of what the L2 reconstruction buys
-// (REFERENCE.md §6). For stationary white noise of variance σ_p² in the primal
+// (the frequency analysis of Kettunen et al. 2015; docs/reconstruction.md,
+// "Predicted improvement"). For stationary white noise of variance σ_p² in the primal
 // and σ_c² in each gradient buffer, the screened Poisson solve has, per
 // frequency ω, the error variance
 //   e(ω) = (a² σ_p² + Σ_c w_c² |D_c(ω)|² σ_c²) / (a + Σ_c w_c |D_c(ω)|²)²,   a = α² w_primal,

@@ -1,4 +1,4 @@
-// Options of the reconstruction (REFERENCE.md §5), with the public code's
+// Options of the reconstruction (docs/reconstruction.md), with the G-PT release's
 // defaults, validated once before a solve and printable for logs.
 #pragma once
 

@@ -1,5 +1,5 @@
 // Reconstruction entry point: a pure function from a window of sampled
-// buffers to images (STYLE.md: the reconstructor knows nothing of the renderer).
+// buffers to images (the reconstructor knows nothing of the renderer: docs/architecture.md).
 #pragma once
 
 #include "core/recon/gradient_window.h"
@@ -8,7 +8,7 @@
 
 namespace gdvr {
 
-// Solves the objective of REFERENCE.md §5 over all frames of the window with
+// Solves the objective of docs/reconstruction.md over all frames of the window with
 // settings.method. Invalid settings or buffers give kInvalidArgument; NaN/Inf
 // samples are dropped (counted in stats), never propagated to the output.
 Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings);

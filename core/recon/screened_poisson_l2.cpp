@@ -1,4 +1,5 @@
-// L2 reconstruction: the screened Poisson problem of REFERENCE.md §5 (p = 2),
+// L2 reconstruction: the screened Poisson problem (Kettunen et al. 2015;
+// docs/reconstruction.md),
 //   (α² I + Σ Hᵀ H) Ī = α² I_g + Σ Hᵀ I_*,
 // solved per channel with Jacobi-preconditioned CG, warm-started from the
 // primal as in the G-PT release.

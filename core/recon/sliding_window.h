@@ -1,4 +1,4 @@
-// Streaming driver for long shots (REFERENCE.md §5, "Windows"): frames arrive
+// Streaming driver for long shots (docs/reconstruction.md, "Sliding windows"): frames arrive
 // in order, windows of W frames advance by a hop of H frames (default W/2, the
 // public T-GPT code's 50 % overlap), and every frame's output is the blend of
 // the solutions of all windows that contain it with Hann weights

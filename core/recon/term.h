@@ -1,4 +1,5 @@
-// The six terms of the temporal gradient-domain objective (REFERENCE.md §5):
+// The six terms of the temporal gradient-domain objective (Manzi et al. 2016;
+// docs/reconstruction.md):
 // one primal and five finite-difference constraints per pixel and frame.
 #pragma once
 
@@ -27,7 +28,7 @@ inline const char* term_name(Term t) {
 inline constexpr int term_index(Term t) { return static_cast<int>(t); }
 
 // Temporal terms couple frame t with frame t+1, so they vanish on the last
-// frame of a window (REFERENCE.md §5: constraints leaving the window are dropped).
+// frame of a window (constraints leaving the window are dropped: docs/reconstruction.md).
 inline constexpr bool is_temporal(Term t) { return t == Term::kDt || t == Term::kDxdt || t == Term::kDydt; }
 // Terms that difference along x (need p+e_x) or y (need p+e_y).
 inline constexpr bool uses_x_neighbour(Term t) { return t == Term::kDx || t == Term::kDxdt; }

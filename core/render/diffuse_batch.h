@@ -14,11 +14,12 @@
 // environment map's radiance along rays that leave; next-event estimation
 // towards other emitters calls FrameScene's own sampling lane by lane.
 //
-// On cbox this made the path tracer's own code per ray about 1.9x faster
-// (docs/foundation.md, fifteenth round); on veach-mis, with conductors and
-// sphere lights, 1.33x faster renders (sixteenth round); on matpreview, with
-// its environment map, 1.13x (seventeenth round), and with its plastic
-// shape 1.115x more (eighteenth round).
+// Why: one path at a time, gdvr's own code between two Embree calls is bound
+// by its instruction count, and eight lanes share those instructions. On cbox
+// this made the path tracer's own code per ray about 1.9x faster; shading
+// conductors and sampling sphere lights here made veach-mis renders 1.33x
+// faster, the environment map and smooth plastic matpreview's 1.13x and then
+// 1.115x (docs/renderer.md, "The vector batch").
 #pragma once
 
 #include <string>

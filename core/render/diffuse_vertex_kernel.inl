@@ -368,7 +368,7 @@ inline vd vsel_d(vl m, vd a, vd b) { return m ? a : b; }
 // between without branches: one lane at a time, with sample_alias's
 // data-dependent branch, the picks were a third of this kernel's samples on
 // matpreview, and this form rendered it 1.046x faster (prefetching the
-// slots on top bought nothing: docs/foundation.md, eighteenth round).
+// slots on top bought nothing).
 struct AliasPicks {
   vu index;
   vf pmf, u;

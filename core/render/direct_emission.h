@@ -1,4 +1,5 @@
-// Emission seen directly from the camera ("very direct" light, REFERENCE.md §1),
+// Emission seen directly from the camera ("very direct" light, docs/gpt.md,
+// "Direct light"),
 // estimated apart from the paths with k×k stratified, jittered camera samples
 // per pixel, more of them where an emitter's edge crosses the pixel.
 //

@@ -12,7 +12,7 @@ namespace {
 // inversions (beckmann_slope.h) run side by side: each Newton step is one
 // loop over all of them, so that the core overlaps their chains of dependent
 // transcendental calls instead of waiting out one chain after the other
-// (veach-mis: docs/foundation.md, thirteenth round). Bit for bit what
+// (about half the time per inversion: docs/bsdf.md). Bit for bit what
 // sample_bsdf gives each path.
 inline void sample_bsdf_stage(const PathTracerSettings& settings, PathState* paths, const int* which, int n) {
   BeckmannSlopeInversion inversions[kPathBatch];

@@ -5,7 +5,7 @@
 // casts that the core cannot overlap with anything; a batch gives it the
 // other paths' independent work to overlap. And the batch's rays of one kind
 // go to Embree as one stream, which it traces in SIMD packets, faster per
-// ray than one at a time (docs/foundation.md). Each path's numbers and
+// ray than one at a time (docs/renderer.md, "Rays in streams"). Each path's numbers and
 // arithmetic are those of trace_path(), and the stream's hits those of single
 // casts, so its radiance is the same bit for bit (but where its camera ray,
 // cast in a coherent stream, meets two triangles at exactly the same t:

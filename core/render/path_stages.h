@@ -35,7 +35,8 @@ namespace gdvr {
 // thin streams is paid once per 256 paths. Paired one-thread renders against
 // 64: 1.063x on cbox, 1.036x on veach-mis, 1.053x on matpreview (512: 1.049,
 // 1.022, 1.067). Refilling the lanes of a 64-path batch as its paths end
-// (path regeneration) was slower: 0.95x (docs/foundation.md, nineteenth round).
+// (path regeneration) was slower, 0.95x: the few fresh camera rays of each
+// pass lose what a coherent stream of camera rays gains.
 constexpr int kPathBatch = 256;
 
 struct PathState {
@@ -241,7 +242,7 @@ inline void log_ray(const Ray& ray, bool shadow, GeometrySet set, uint32_t strea
 // whatever lies before it emits nothing (it would be the closest emitter).
 // The second query stops short of the emitter as a shadow ray does
 // (kShadowEpsilon). On veach-mis (max_depth 3) this cut the render's
-// instructions by 3.2 % (docs/foundation.md, tenth round).
+// instructions by 3.2 %.
 //
 // What the emitters-only query answered (`found`, `hit`) sets in st; returns
 // whether the any-hit query over st->shadow must decide whether it is seen.

@@ -1,5 +1,5 @@
 // Unidirectional path tracing with next-event estimation and BSDF sampling
-// combined by the power heuristic (REFERENCE.md §1), written to match Mitsuba
+// combined by the power heuristic (Veach 1997, Sec. 9.2), written to match Mitsuba
 // 3's `path` integrator: max_depth counts path segments (1 = emitters seen
 // directly, -1 = unbounded), Russian roulette from rr_depth with survival
 // min(max(throughput) * eta^2, 1) (russian_roulette.h: Mitsuba caps it at 0.95).

@@ -1,5 +1,5 @@
 // Error figures of a rendered image (sequence) against a reference
-// (REFERENCE.md §7): both relMSE forms, temporal flicker, and helpers for
+// (docs/report.md, "The figures"): both relMSE forms, temporal flicker, and helpers for
 // equal-time comparisons on log-log curves.
 #pragma once
 
@@ -36,7 +36,7 @@ constexpr double kRelMsePerPixelEpsilon = 0.01;
 // counts it).
 Expected<RelMseSums> rel_mse_sums(const Image& image, const Image& reference);
 
-// Temporal flicker (REFERENCE.md §7): the mean over consecutive frame pairs of
+// Temporal flicker (docs/report.md): the mean over consecutive frame pairs of
 // the mean squared change of the error e_t = I_t − R_t, i.e.
 //   1/(T−1) Σ_t mean((e_{t+1} − e_t)²)   over the first three channels.
 // A static error (bias) gives 0; independent noise of variance σ² gives 2σ².

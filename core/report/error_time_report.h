@@ -1,4 +1,4 @@
-// The error-vs-time report (REFERENCE.md §6-§7): renders a job's frames with
+// The error-vs-time report (docs/report.md): renders a job's frames with
 // PT, G-PT (L1, L2, weighted) and, for animations, T-GPT (L1, L2) at a series
 // of equal wall-time budgets per frame, measures each against a reference
 // (rendered with high-spp PT and cached, or supplied as EXR), and writes

@@ -37,7 +37,8 @@ struct ReportRow {
   // per frame, over this row's: corrects for reconstruction time on top of the budget.
   double equal_time_ratio_interpolated = kNoValue;
   // Reconstruction vs its own unreconstructed primal (+ direct), same samples:
-  // predicted from the measured variances (REFERENCE.md §6, L2 model) and achieved (global relMSE ratio).
+  // predicted from the measured variances (docs/reconstruction.md, "Predicted improvement": L2 model) and
+  // achieved (global relMSE ratio).
   double predicted_improvement = kNoValue;
   double achieved_improvement = kNoValue;
   std::vector<int> frame_numbers;

@@ -1,8 +1,8 @@
 // "What changes between frame t and t+1" (issue 4, "leave out what the scene
 // does not need"): compares the two animated scene descriptions. If nothing a
 // path can see moves, the temporal gradients of the pair are exactly zero
-// (REFERENCE.md §4, last paragraph), so no temporal offsets, motion vectors
-// or temporal buffers are needed for it.
+// (docs/tgpt.md, "Leaving out what the scene does not need"), so no temporal
+// offsets, motion vectors or temporal buffers are needed for it.
 #pragma once
 
 #include <string>

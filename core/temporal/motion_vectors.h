@@ -1,5 +1,5 @@
-// Motion vectors by primary-hit reprojection (REFERENCE.md §4; Manzi et al.
-// 2016, public release): trace the camera ray through each pixel centre at
+// Motion vectors by primary-hit reprojection (Manzi et al. 2016 and their
+// public release; docs/tgpt.md): trace the camera ray through each pixel centre at
 // frame t, carry the hit point with its shape's motion to the other frame's
 // time (x' = T_other · T_t⁻¹ · x), project it with the other frame's camera and
 // round the offset to whole pixels. A forward/backward check then decides

@@ -1,5 +1,5 @@
 // Which sample streams the two half passes of a T-GPT frame use
-// (REFERENCE.md §4; Manzi et al. 2016, public release): frame t renders pass A
+// (Manzi et al. 2016, public release; docs/tgpt.md): frame t renders pass A
 // with stream s(t) and pass B with stream s(t_next), t_next the next frame of
 // the job, so pass B of frame t and pass A of frame t_next replay the same
 // random numbers (Sampler(seed, stream, px, py, s), core/math/rng.h) in two

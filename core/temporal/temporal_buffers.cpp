@@ -80,7 +80,7 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
   const ImageLayer* forward = t.find("motion");
   if (!forward) {
     // Static pair: the replayed offset would be the base path itself
-    // (REFERENCE.md §4, "Static content needs no temporal sampling").
+    // (docs/tgpt.md, "Leaving out what the scene does not need").
     g.static_pair = true;
     for (Image* im : {&g.dt, &g.dxdt, &g.dydt, &g.dt_var, &g.dxdt_var, &g.dydt_var}) *im = Image(w, h, 3);
     return g;

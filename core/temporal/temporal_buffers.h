@@ -1,5 +1,5 @@
 // The named buffers of T-GPT and the temporal gradients made from them
-// (STYLE.md: named buffers, not magic indices).
+// (named buffers, not magic indices: docs/architecture.md).
 //
 // Stage 1 stores per frame (tgpt_frame_layers): both half passes
 // ("a_primal", "a_dx", "a_dy", "b_…", with "_var" variances), the averaged
@@ -15,7 +15,7 @@
 //   dt_t   = A_{t+1}.primal − B_t.primal   ≈ I_{t+1}(p) − I_t(p)
 //   dxdt_t = A_{t+1}.dx − B_t.dx,  dydt_t = A_{t+1}.dy − B_t.dy
 // i.e. the same-pixel differences that core/recon's H_dt, H_dxdt, H_dydt
-// expect (REFERENCE.md §5). Each is unbiased (difference of two unbiased
+// expect (docs/reconstruction.md). Each is unbiased (difference of two unbiased
 // estimates), and low-variance where the replay pair stays correlated.
 #pragma once
 

@@ -1,5 +1,5 @@
 // Stage 2 of T-GPT: the sliding-window reconstruction of a shot from its
-// frames' buffers (REFERENCE.md §5, "Windows").
+// frames' buffers (Manzi et al. 2016; docs/tgpt.md, "Reconstruction: sliding windows").
 //
 // The windows are those of core/recon's SlidingWindowReconstructor (W frames,
 // hop H = W/2 by default, Hann blend ½(1 + cos(2π(f − c)/W)) normalised by the

@@ -1,4 +1,4 @@
-// Stage 1 of T-GPT for one frame (REFERENCE.md §4): two half-spp G-PT passes
+// Stage 1 of T-GPT for one frame (Manzi et al. 2016; docs/tgpt.md): two half-spp G-PT passes
 // with the streams of core/temporal/pass_schedule.h, and the motion fields
 // towards the neighbouring frames where the frame pair changes. Everything
 // stage 2 needs (the temporal gradients are differences between this frame's

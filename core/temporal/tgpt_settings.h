@@ -1,5 +1,5 @@
 // Options of the temporal gradient-domain path tracer (T-GPT, Manzi et al.
-// 2016, REFERENCE.md §4, §5): the spatial G-PT options of each half pass, how
+// 2016; docs/tgpt.md): the spatial G-PT options of each half pass, how
 // temporal constraints follow motion, and the sliding-window reconstruction.
 // Validated once before a job; printable for logs.
 #pragma once
@@ -12,7 +12,7 @@
 
 namespace gdvr {
 
-// How the temporal gradient dt is sampled (REFERENCE.md §4):
+// How the temporal gradient dt is sampled (docs/tgpt.md):
 enum class TemporalShiftMapping {
   // replay: pass B of frame t and pass A of t+1 share their random numbers;
   // dt = A_{t+1} − B_t (the public T-GPT code).
@@ -33,7 +33,7 @@ struct TgptSettings {
 
   TemporalShiftMapping temporal_shift = TemporalShiftMapping::kReplay;
 
-  // ---- Motion vectors (primary-hit reprojection, REFERENCE.md §4) ----
+  // ---- Motion vectors (primary-hit reprojection, docs/tgpt.md "dt and motion") ----
   // Off: every temporal constraint is kept (same-pixel dt is unbiased anyway).
   bool motion_vectors = true;
   // Forward/backward consistency: |m_fwd(p) + m_bwd(p + m_fwd(p))| ≤ this, per
@@ -45,19 +45,19 @@ struct TgptSettings {
   // constraint is dropped (docs/tgpt.md, "dt and motion"). < 0: no limit.
   int max_same_pixel_motion_px = 1;
 
-  // ---- Sliding-window reconstruction (REFERENCE.md §5) ----
+  // ---- Sliding-window reconstruction (docs/reconstruction.md, "Sliding windows") ----
   ReconSettings recon;
   int window = 20;  // W ≥ 1; W = 1 is spatial G-PT
   int hop = 0;      // H, frames between window starts; 0 = max(1, W/2)
   int effective_hop() const { return hop > 0 ? hop : (window / 2 > 0 ? window / 2 : 1); }
 
   // G-PT's defaults for `shift`, but with cached-path Russian roulette off:
-  // docs/gpt.md measured that RR multiplies the gradient variance ~13× on cbox
-  // and that L2 at equal time is 1.6× better without it (0.00068 vs 0.00112);
+  // RR multiplies the gradient variance ~13× on cbox, and G-PT's L2 result at
+  // equal time is several times better without it (docs/benchmarks.md, G-PT);
   // T-GPT reconstructs with L2 by default and its dxdt, dydt inherit the
   // spatial gradients' noise. Per-pixel sub-pixel positions too: with the
   // shared position (GptSettings::shared_jitter) the demo shot's relMSE was
-  // 27 % higher at equal spp (0.00102 vs 0.00080, gdvr-bench-tgpt, 12-02),
+  // 27 % higher at equal spp (0.00102 vs 0.00080, gdvr-bench-tgpt),
   // more than the 4-14 % it saves in time: the two generations of a pair
   // share their first hits, and the anti-aliasing error, correlated between
   // neighbours, is low-frequency error the L2 solve takes from the primal.

@@ -1,10 +1,10 @@
 // Benchmark of G-PT against PT (docs/gpt.md):
 // - cost: G-PT wall time per spp / PT's at equal spp, per scene, shift mapping
 //   and cached-path RR setting, median over runs, PT measured in the same run;
-// - quality: relMSE (per-pixel and global, REFERENCE.md §7) at equal wall-time
+// - quality: relMSE (per-pixel and global, docs/report.md) at equal wall-time
 //   budgets of PT and G-PT with L1, L2 and weighted reconstruction against the
 //   Mitsuba references, plus the improvement predicted from measured variances
-//   (REFERENCE.md §6) next to the achieved one at equal spp.
+//   (docs/reconstruction.md, "Predicted improvement") next to the achieved one at equal spp.
 //
 //   gdvr-bench-gpt [--scenes cbox,veach-mis,matpreview] [--runs 3] [--spp 8]
 //                  [--budgets 2,4,8] [--threads 2] [--no-cost] [--no-quality] [--default-only]

@@ -1,6 +1,6 @@
 // Benchmark of T-GPT (docs/tgpt.md, issue 4):
 // - quality: on the demo animation (scenes/demo/demo_job.json, reduced
-//   resolution), relMSE per frame (per-pixel and global, REFERENCE.md §7)
+//   resolution), relMSE per frame (per-pixel and global, docs/report.md)
 //   against a converged PT sequence, and temporal flicker (mean squared
 //   frame-to-frame change of result − reference), for PT, frame-by-frame G-PT
 //   (L2) and T-GPT (L2, W-frame window) at equal total wall time: each
@@ -128,7 +128,7 @@ Errors errors(const std::vector<Image>& img, const std::vector<Image>& ref) {
     e.rel_mse_mean += e.rel_mse.back() / double(img.size());
   }
   e.global_rel_mse = den > 0 ? num / den : 0;
-  // Flicker (REFERENCE.md §7): mean squared frame-to-frame change of the error.
+  // Flicker (docs/report.md): mean squared frame-to-frame change of the error.
   for (size_t t = 0; t + 1 < img.size(); ++t) {
     double s = 0, rs = 0;
     for (size_t k = 0; k < img[t].data().size(); ++k) {

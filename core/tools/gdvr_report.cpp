@@ -1,4 +1,4 @@
-// gdvr-report: error against run time (REFERENCE.md §6-§7; docs/report.md).
+// gdvr-report: error against run time (docs/report.md).
 //   gdvr-report JOB.json|SCENE.xml --out DIR [--reference REF.exr|ref_%04d.exr]
 //       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]
 //       [--threads N] [--width W --height H] [--seed N] [--param NAME=VALUE ...]

@@ -5,7 +5,7 @@
 // 74 MB per 20-frame solver vector) again and again. glibc serves blocks that
 // large with fresh mmap pages and unmaps them on free, so every reuse pays the
 // kernel's zeroing of new pages on first touch: 27 % of all cycles of a 720p
-// T-GPT stage-2 run (perf, docs/tgpt.md). Keeping freed memory in the heap
+// T-GPT stage-2 run (perf; docs/benchmarks.md). Keeping freed memory in the heap
 // (no mmap for large blocks, no trimming) lets the next buffer reuse it:
 // stage 2 at 720p, three alternating pairs of runs: median 0.87 s per output
 // frame against 0.92 s with glibc's defaults, at the same peak RSS (the runs

@@ -8,7 +8,7 @@
 #
 # Targets: mitsuba_xml gltf job_spec obj ply serialized (default: all).
 # Environment: GDVR_FUZZ_BUILD_DIR (default build-fuzz), GDVR_FUZZ_JOBS (ninja -j, default 2).
-# A crash found becomes a regression test in tests/core/... (docs/report.md).
+# A crash found becomes a regression test in tests/core/... (docs/correctness.md).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 

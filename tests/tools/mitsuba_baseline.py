@@ -3,7 +3,7 @@
 
 For each scene: render with Mitsuba 3 (scalar_rgb, box filter, the reference's
 resolution and max_depth) at N spp with several seeds, and compute both relMSE
-forms (REFERENCE.md §7) against the committed 4096-spp reference. Writes a JSON
+forms (docs/report.md) against the committed 4096-spp reference. Writes a JSON
 that the agreement test (tests/core/render/mitsuba_agreement_test.cpp) and the
 benchmark read, so CI never needs Mitsuba itself.
 

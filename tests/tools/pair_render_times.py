@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Paired A/B timing of two gdvr-render builds: the method behind the
-"old/new, N pairs" figures in docs/foundation.md.
+"old/new, N pairs" figures in docs/benchmarks.md.
 
 Each pair runs OLD and NEW at the same moment, one thread each, pinned to
 cores 0 and 1 (swapped every pair, so neither build keeps the better core).

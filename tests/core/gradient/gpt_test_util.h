@@ -84,7 +84,7 @@ inline bool all_finite(const Image& img) {
   return true;
 }
 
-// Per-pixel relMSE mean((I - R)^2 / (R^2 + 0.01)) over RGB (REFERENCE.md §7).
+// Per-pixel relMSE mean((I - R)^2 / (R^2 + 0.01)) over RGB (docs/report.md).
 inline double rel_mse(const Image& img, const Image& ref) {
   double sum = 0;
   for (size_t k = 0; k < ref.data().size(); ++k) {

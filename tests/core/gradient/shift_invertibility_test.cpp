@@ -1,6 +1,6 @@
 // Shift mappings applied forwards and backwards, parametrised over the
 // cached-path shifts: shifting the offset back into the base pixel recovers
-// the base path (invertibility, REFERENCE.md §2), and the pair's two MIS
+// the base path (invertibility: docs/gpt.md, "Shift mappings"), and the pair's two MIS
 // weights sum to one for every technique (r_forward · r_backward = 1).
 #include <gtest/gtest.h>
 

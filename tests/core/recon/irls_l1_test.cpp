@@ -7,7 +7,7 @@ namespace gdvr {
 namespace {
 
 // A few grossly wrong gradients (a "firefly" in the gradient buffers) smear
-// into a halo under L2 but are voted down under L1 (REFERENCE.md §5).
+// into a halo under L2 but are voted down under L1 (docs/reconstruction.md).
 TEST(IrlsL1Test, RobustToPlantedOutlierGradientsWhereL2IsNot) {
   for (int frames : {1, 3}) {
     test::SceneOptions o;

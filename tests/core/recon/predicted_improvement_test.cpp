@@ -8,7 +8,8 @@
 namespace gdvr {
 namespace {
 
-// White noise around a zero image: the prediction of REFERENCE.md §6 must
+// White noise around a zero image: the prediction (docs/reconstruction.md,
+// "Predicted improvement") must
 // match the error the L2 solver actually achieves.
 double monte_carlo_improvement(int frames, float sp, float sg, const ReconSettings& s) {
   double mse_primal = 0, mse_recon = 0;

@@ -1,6 +1,6 @@
 // Synthetic windows with known answers for the reconstruction tests: a smooth
 // field plus a moving hard edge, with exact finite-difference gradients
-// (REFERENCE.md §5 conventions), optionally a noisy primal.
+// (the conventions of docs/reconstruction.md), optionally a noisy primal.
 #pragma once
 
 #include <cmath>

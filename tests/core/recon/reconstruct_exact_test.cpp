@@ -1,5 +1,5 @@
 // Every solver must return the exact image when fed exact gradients
-// (STYLE.md: "reconstruction of exact gradients returning the exact image"),
+// (a known answer: exact gradients must reconstruct the exact image),
 // for a single frame and for a 5-frame window with temporal terms.
 #include <gtest/gtest.h>
 

@@ -32,7 +32,7 @@ void PrintTo(const AgreementCase& c, std::ostream* os) { *os << c.name; }
 
 std::string source_dir() { return GDVR_SOURCE_DIR; }
 
-// Per-pixel relMSE terms (REFERENCE.md §7), one per pixel and channel.
+// Per-pixel relMSE terms (docs/report.md), one per pixel and channel.
 std::vector<double> rel_mse_terms(const Image& img, const Image& ref) {
   std::vector<double> terms;
   terms.reserve(ref.pixel_count() * 3);

@@ -1,4 +1,4 @@
-// Inputs found by the fuzz targets (tests/fuzz/, docs/report.md#fuzzing) that
+// Inputs found by the fuzz targets (tests/fuzz/, docs/correctness.md#fuzzing) that
 // crashed a scene reader; each must now be a clean error.
 #include <gtest/gtest.h>
 #include <unistd.h>

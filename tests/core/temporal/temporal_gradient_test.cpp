@@ -1,6 +1,6 @@
 // Statistical test of the temporal estimators: over independent seeds, the
 // mean of dt, dxdt, dydt equals the finite difference of converged PT frames
-// (REFERENCE.md §4), on the demo scene with a moving box and camera; and the
+// (docs/tgpt.md), on the demo scene with a moving box and camera; and the
 // frame renderer counts zero temporal rays across static pairs.
 #include <gtest/gtest.h>
 
