@@ -1,5 +1,6 @@
 #include "core/job/job_outputs.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -172,9 +173,29 @@ void remove_stale_temporaries(const std::string& dir) {
   }
 }
 
+const std::vector<std::string>& known_exr_layers() {
+  static const std::vector<std::string> names = {
+      "direct",   "variance", "primal",   "dx",       "dy",       "dt",     "dxdt",
+      "dydt",     "primal_var", "dx_var", "dy_var",   "dt_var",   "dxdt_var", "dydt_var",
+      "shift_failure_rate", "temporal_failure_rate", "motion"};
+  return names;
+}
+
 Status JobOutputs::validate(const JobSpec& job, const Options& options, int first_frame) {
   const std::string& ocio_config = options.ocio_config;
   const std::string& asset_root = options.asset_root;
+  const auto& known = known_exr_layers();
+  const auto& selected = job.outputs.exr_layers;
+  for (size_t i = 0; i < selected.size(); ++i) {
+    const std::string field = "outputs.exr_layers[" + std::to_string(i) + "]";
+    if (std::find(known.begin(), known.end(), selected[i]) == known.end()) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      return invalid_argument(field + ": unknown layer '" + selected[i] + "' (known: " + list + ")");
+    }
+    if (std::find(selected.begin(), selected.begin() + long(i), selected[i]) != selected.begin() + long(i))
+      return invalid_argument(field + ": layer '" + selected[i] + "' is listed twice");
+  }
   if (wants_video(job)) GDVR_RETURN_IF_ERROR(with_field(parse_video_codec(job.outputs.video_codec).status(),
                                                        "outputs.video_codec"));
   if (wants_display(job)) {
@@ -227,6 +248,17 @@ Expected<std::unique_ptr<JobOutputs>> JobOutputs::open(const JobSpec& job, std::
 
 JobOutputs::~JobOutputs() = default;  // an unclosed encoder deletes its partial file
 
+LayeredImage JobOutputs::selected_layers(const LayeredImage& image, std::vector<std::string>* left_out) const {
+  const auto& selected = job_.outputs.exr_layers;
+  LayeredImage kept;
+  for (const ImageLayer& l : image.layers)
+    if (l.name.empty() || std::find(selected.begin(), selected.end(), l.name) != selected.end()) kept.layers.push_back(l);
+  for (const std::string& name : selected)
+    if (!image.find(name))
+      left_out->push_back("EXR layer '" + name + "': integrator " + job_.integrator + " does not produce it");
+  return kept;
+}
+
 int64_t JobOutputs::video_frames() const { return video_ ? video_->frames_written() : 0; }
 
 Expected<WrittenFrame> JobOutputs::write_frame(const FrameOutput& out) {
@@ -236,7 +268,9 @@ Expected<WrittenFrame> JobOutputs::write_frame(const FrameOutput& out) {
   rec.stats = out.stats;
   rec.stats.frame = frame;
   const std::string path = dir_ + "/" + rec.file;
-  GDVR_RETURN_IF_ERROR(write_exr(path, out.image).with_context("writing " + path + ": "));
+  const bool all_layers = job_.outputs.exr_layers.empty();
+  const LayeredImage kept = all_layers ? LayeredImage() : selected_layers(out.image, &rec.stats.left_out);
+  GDVR_RETURN_IF_ERROR(write_exr(path, all_layers ? out.image : kept).with_context("writing " + path + ": "));
   std::error_code ec;
   rec.bytes = uint64_t(fs::file_size(path, ec));
   const ImageLayer* failures = out.image.find("shift_failure_rate");

@@ -42,6 +42,11 @@ std::string reference_path(const std::string& asset_root, const std::string& ref
 // three or more channels; nullptr when there is none.
 const Image* main_rgb(const LayeredImage& image);
 
+// Every named EXR layer an integrator can put into a final frame (the
+// unnamed layer, the image itself, is always written): what
+// job.outputs.exr_layers may select from.
+const std::vector<std::string>& known_exr_layers();
+
 // A final frame as written: its file and what it cost, with the figures the
 // output stage adds (relMSE against the reference, the shift failure rate).
 struct WrittenFrame {
@@ -71,8 +76,8 @@ class JobOutputs {
     std::string asset_root;
   };
 
-  // Checks the output options (codec, OCIO config/display/view) and the
-  // reference without rendering: errors name the field.
+  // Checks the output options (layers, codec, OCIO config/display/view) and
+  // the reference without rendering: errors name the field.
   static Status validate(const JobSpec& job, const Options& options, int first_frame);
 
   // `frames`: the frames this run is responsible for, in order (the video
@@ -82,7 +87,9 @@ class JobOutputs {
                                                     Options options);
   ~JobOutputs();
 
-  // Before the frame is announced: writes its EXR (atomically), computes the
+  // Before the frame is announced: writes its EXR (atomically; the image and
+  // the layers job.outputs.exr_layers selects, all when it is empty; a selected
+  // layer this integrator does not produce is named in left_out), computes the
   // display image, writes the preview and, when the job has a reference,
   // fills the record's relMSE with both forms of core/report/error_metrics.h
   // (the figures gdvr-report uses); the record's left_out says why they are
@@ -103,6 +110,7 @@ class JobOutputs {
  private:
   JobOutputs() = default;
   Status encode(const Image& display);
+  LayeredImage selected_layers(const LayeredImage& image, std::vector<std::string>* left_out) const;
   Status catch_up_before(int frame);
   Expected<Image> display_from_disk(int frame);
 

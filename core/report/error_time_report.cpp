@@ -469,7 +469,8 @@ std::string html_report(const ErrorTimeReportOptions& o, const ReportMeta& meta,
   h << "</table>\n";
   // ---- Predicted vs achieved ----
   h << "<h2>Predicted against achieved improvement</h2>\n<p>Reconstruction against its own primal (+ direct light), "
-       "same samples. Predicted: REFERENCE.md &sect;6 from the measured mean variances of the buffers (L2 model, "
+       "same samples. Predicted: the frequency-domain model of Kettunen et al. 2015 (docs/reconstruction.md) from the "
+       "measured mean variances of the buffers (L2 model, "
        "white noise; " << (animated ? "temporal terms included for T-GPT" : "spatial") << "). Achieved: global "
        "relMSE of primal + direct over that of the result. A large shortfall points at a broken shift, a bad solver "
        "or an error dominated by the reference's own noise.</p>\n<table><tr><th>method</th><th>budget s</th>"
