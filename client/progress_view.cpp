@@ -90,7 +90,7 @@ std::string ProgressView::line(double now_s, const std::string& note) const {
   const int width = 30;
   int fin = 0, ren = 0;
   if (total_ > 0) {
-    fin = int(double(final_) / total_ * width);
+    fin = std::min(width, final_ * width / total_);
     double r = std::max(double(rendered_) / total_, render_fraction_);
     ren = std::max(fin, int(std::min(1.0, r) * width));
   }

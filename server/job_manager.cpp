@@ -775,13 +775,15 @@ Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<boo
     uint64_t progress_seq;
     std::string reason, code;
     int queue_pos;
+    int final_before;  // final frames numbered below next_frame
     bool started;
     std::vector<int> skipped;
     {
       std::unique_lock<std::mutex> lock(mu_);
       state = job->state;
-      for (auto it = job->final_frames.lower_bound(next_frame); it != job->final_frames.end(); ++it)
-        frames.emplace_back(it->first, it->second);
+      auto first = job->final_frames.lower_bound(next_frame);
+      final_before = int(std::distance(job->final_frames.begin(), first));
+      for (auto it = first; it != job->final_frames.end(); ++it) frames.emplace_back(it->first, it->second);
       progress = job->progress;
       progress_seq = job->progress_seq;
       reason = job->reason;
@@ -806,7 +808,13 @@ Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<boo
       started_sent = true;
     }
     for (const auto& [f, rec] : frames) {
-      if (!send_frame(*job, f, rec, req.include_raw_rgb(), send, progress)) return Status::Ok();
+      // Each frame carries the count as of itself (frames become final in
+      // frame order), not the snapshot's: a batch of frames solved together
+      // must not all say "48/48" while 17 are still on their way.
+      v1::Progress at_frame = progress;
+      at_frame.set_frames_done(++final_before);
+      at_frame.set_frames_rendered(std::max(at_frame.frames_rendered(), final_before));
+      if (!send_frame(*job, f, rec, req.include_raw_rgb(), send, at_frame)) return Status::Ok();
       next_frame = f + 1;
     }
     if (is_terminal(state)) {
