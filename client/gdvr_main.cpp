@@ -436,9 +436,12 @@ int cmd_watch(Connection& conn, const Args& a) {
   return watch_job(conn, a.positional[0], out, from, false, 0, !a.has("no-artifacts"));
 }
 
+// Final frames and rendering progress apart (Progress in the proto): for
+// tgpt the first trails the second by up to a reconstruction window.
 void print_job(const v1::Job& j) {
-  std::printf("%s  %-9s  %d/%d frames  %3d%%  priority %d  scene %s%s%s\n", j.id().c_str(), state_name(j.state()),
-              j.final_frames_size(), j.frames_size(), int(j.progress().fraction() * 100 + 0.5), j.priority(),
+  int rendered = std::max(j.progress().frames_rendered(), j.final_frames_size());
+  std::printf("%s  %-10s  final %d/%d  rendered %d/%d  priority %d  scene %s%s%s\n", j.id().c_str(),
+              state_name(j.state()), j.final_frames_size(), j.frames_size(), rendered, j.frames_size(), j.priority(),
               j.spec().scene().c_str(), j.reason().empty() ? "" : "  reason: ", j.reason().c_str());
 }
 
