@@ -18,6 +18,7 @@
 
 #include "client/connection.h"
 #include "client/frame_sink.h"
+#include "client/progress_view.h"
 
 namespace fs = std::filesystem;
 using namespace gdvr;
@@ -35,7 +36,7 @@ commands:
   watch JOB_ID [--out DIR] [--from FRAME] [--no-artifacts]
                                              resumes after the last frame in DIR
   status JOB_ID
-  list [--state queued|running|completed|failed|cancelled] [--limit N]
+  list [--state queued|running|cancelling|completed|failed|cancelled] [--limit N]
   cancel JOB_ID
   fetch JOB_ID --out DIR [--what frames,previews,video,stats]
                                              saves the job's files as they are now
@@ -99,15 +100,6 @@ std::string random_key() {
   return buf;
 }
 
-std::string fmt_duration(double s) {
-  if (s < 0) return "--:--";
-  int t = int(s + 0.5);
-  char buf[32];
-  if (t >= 3600) std::snprintf(buf, sizeof buf, "%d:%02d:%02d", t / 3600, t / 60 % 60, t % 60);
-  else std::snprintf(buf, sizeof buf, "%d:%02d", t / 60, t % 60);
-  return buf;
-}
-
 const char* state_name(v1::JobState s) {
   switch (s) {
     case v1::JOB_STATE_QUEUED: return "queued";
@@ -115,26 +107,23 @@ const char* state_name(v1::JobState s) {
     case v1::JOB_STATE_COMPLETED: return "completed";
     case v1::JOB_STATE_FAILED: return "failed";
     case v1::JOB_STATE_CANCELLED: return "cancelled";
+    case v1::JOB_STATE_CANCELLING: return "cancelling";
     default: return "unknown";
   }
 }
 
 // ---- Progress display ----
 
+// Draws ProgressView's line: redrawn in place on a terminal; in logs, one
+// line per final frame (not per tick).
 class ProgressBar {
  public:
-  ProgressBar() : tty_(isatty(STDERR_FILENO)) {}
-  void update(const v1::Progress& p, const std::string& note) {
-    double f = std::min(1.0, std::max(0.0, p.fraction()));
-    const int width = 30;
-    int filled = int(f * width + 0.5);
-    std::string bar(size_t(filled), '#');
-    bar += std::string(size_t(width - filled), '.');
-    char line[256];
-    std::snprintf(line, sizeof line, "[%s] %d/%d frames %3d%%  ETA %s  %s", bar.c_str(), p.frames_done(),
-                  p.frames_total(), int(f * 100 + 0.5), fmt_duration(p.eta_seconds()).c_str(), note.c_str());
-    if (tty_) std::fprintf(stderr, "\r%-100s", line);
-    else if (!note.empty()) std::fprintf(stderr, "%s\n", line);  // logs: one line per frame, not per tick
+  ProgressBar() : tty_(isatty(STDERR_FILENO)), start_(std::chrono::steady_clock::now()) {}
+  void on_event(const v1::JobEvent& ev) { view_.on_event(ev, now()); }
+  void draw(const std::string& note) {
+    std::string line = view_.line(now(), note);
+    if (tty_) std::fprintf(stderr, "\r%-110s", line.c_str());
+    else if (!note.empty()) std::fprintf(stderr, "%s\n", line.c_str());
     std::fflush(stderr);
   }
   void done() {
@@ -142,7 +131,12 @@ class ProgressBar {
   }
 
  private:
+  double now() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
   bool tty_;
+  std::chrono::steady_clock::time_point start_;
+  ProgressView view_;
 };
 
 // ---- Artifacts ----
@@ -245,13 +239,15 @@ int watch_job(Connection& conn, const std::string& job_id, const std::string& ou
           std::fprintf(stderr, "gdvr: job %s queued (position %d)\n", job_id.c_str(), ev.queued().queue_position());
           break;
         case v1::JobEvent::kStarted:
+          bar.on_event(ev);
           std::fprintf(stderr, "gdvr: job %s running, %d frames%s\n", job_id.c_str(), ev.started().frames_total(),
                        ev.started().skipped_frames_size()
                            ? (" (" + std::to_string(ev.started().skipped_frames_size()) + " already final)").c_str()
                            : "");
           break;
         case v1::JobEvent::kFrameRendered:
-          bar.update(ev.frame_rendered().progress(), "");
+          bar.on_event(ev);
+          bar.draw("");
           break;
         case v1::JobEvent::kFrameFinal: {
           int done = INT_MIN;
@@ -265,7 +261,8 @@ int watch_job(Connection& conn, const std::string& job_id, const std::string& ou
           if (done != INT_MIN) {
             next = done + 1;
             ++received;
-            bar.update(ev.frame_final().progress(), "frame " + std::to_string(done));
+            bar.on_event(ev);
+            bar.draw("frame " + std::to_string(done));
             if (stop_when_caught_up && received >= caught_up_frames) {
               ctx->TryCancel();
               bar.done();
@@ -275,7 +272,8 @@ int watch_job(Connection& conn, const std::string& job_id, const std::string& ou
           break;
         }
         case v1::JobEvent::kCompleted:
-          bar.update(ev.completed().progress(), "");
+          bar.on_event(ev);
+          bar.draw("");
           bar.done();
           std::fprintf(stderr, "gdvr: job %s completed%s%s\n", job_id.c_str(), out_dir.empty() ? "" : "; frames in ",
                        out_dir.c_str());
@@ -438,9 +436,12 @@ int cmd_watch(Connection& conn, const Args& a) {
   return watch_job(conn, a.positional[0], out, from, false, 0, !a.has("no-artifacts"));
 }
 
+// Final frames and rendering progress apart (Progress in the proto): for
+// tgpt the first trails the second by up to a reconstruction window.
 void print_job(const v1::Job& j) {
-  std::printf("%s  %-9s  %d/%d frames  %3d%%  priority %d  scene %s%s%s\n", j.id().c_str(), state_name(j.state()),
-              j.final_frames_size(), j.frames_size(), int(j.progress().fraction() * 100 + 0.5), j.priority(),
+  int rendered = std::max(j.progress().frames_rendered(), j.final_frames_size());
+  std::printf("%s  %-10s  final %d/%d  rendered %d/%d  priority %d  scene %s%s%s\n", j.id().c_str(),
+              state_name(j.state()), j.final_frames_size(), j.frames_size(), rendered, j.frames_size(), j.priority(),
               j.spec().scene().c_str(), j.reason().empty() ? "" : "  reason: ", j.reason().c_str());
 }
 
@@ -454,7 +455,7 @@ int cmd_status(Connection& conn, const Args& a) {
   if (!st.ok()) return report_rpc_error("status " + a.positional[0], st, conn.options());
   print_job(job);
   if (job.state() == v1::JOB_STATE_RUNNING)
-    std::printf("  ETA %s, output %s\n", fmt_duration(job.progress().eta_seconds()).c_str(), job.output_dir().c_str());
+    std::printf("  ETA %s, output %s\n", format_duration(job.progress().eta_seconds()).c_str(), job.output_dir().c_str());
   return kExitOk;
 }
 
@@ -489,7 +490,7 @@ int cmd_cancel(Connection& conn, const Args& a) {
   auto ctx = conn.context();
   grpc::Status st = conn.stub()->CancelJob(ctx.get(), req, &job);
   if (!st.ok()) return report_rpc_error("cancel " + a.positional[0], st, conn.options());
-  std::fprintf(stderr, "gdvr: cancel requested for %s (was %s)\n", job.id().c_str(), state_name(job.state()));
+  std::fprintf(stderr, "gdvr: %s is %s\n", job.id().c_str(), state_name(job.state()));
   return kExitOk;
 }
 

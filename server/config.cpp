@@ -37,7 +37,19 @@ std::string server_usage() {
   --concurrency=N           jobs rendering at once (default 1)
   --threads=N               render threads in all (default 0: all cores)
   --max-width=N --max-height=N --max-spp=N --max-frames=N
-  --max-upload-bytes=N --max-message-bytes=N --max-queue=N
+                            limits on what a job renders, after its scene and params
+                            resolve (default 8192, 8192, 65536, 100000)
+  --max-time-budget=S       largest time_budget_s per frame (default 86400)
+  --max-work=N              largest frames x width x height x spp of a job
+                            (default 10000000000000)
+  --max-upload-bytes=N      largest uploaded bundle (default 256 MiB)
+  --max-message-bytes=N --max-queue=N
+  --upload-root=DIR         uploaded bundles (default <output-root>/uploads; never
+                            inside --asset-root)
+  --upload-quota-bytes=N --upload-quota-files=N
+                            all uploaded bundles together (default 4 GiB, 10000 files)
+  --upload-retention-s=S    bundles no queued or running job names are deleted once
+                            this old (default 86400)
   --token-file=PATH         accepted bearer tokens, one per line
                             (also $GDVR_TOKENS, comma-separated); none: no auth
   --tls-cert=PEM --tls-key=PEM [--tls-ca=PEM]   TLS; with a CA, clients need certificates
@@ -95,6 +107,12 @@ Expected<ServerConfig> parse_server_flags(int argc, char** argv) {
     else if (flag == "max-height") { GDVR_RETURN_IF_ERROR(as_int(1, 1 << 20)); c.limits.max_height = int(n); }
     else if (flag == "max-spp") { GDVR_RETURN_IF_ERROR(as_int(1, 1 << 30)); c.limits.max_spp = int(n); }
     else if (flag == "max-frames") { GDVR_RETURN_IF_ERROR(as_int(1, 1 << 30)); c.limits.max_frames = size_t(n); }
+    else if (flag == "max-time-budget") { GDVR_RETURN_IF_ERROR(as_int(1, 1ll << 31)); c.limits.max_time_budget_s = double(n); }
+    else if (flag == "max-work") { GDVR_RETURN_IF_ERROR(as_int(1, 1ll << 62)); c.limits.max_work = uint64_t(n); }
+    else if (flag == "upload-root") c.uploads.root = value;
+    else if (flag == "upload-quota-bytes") { GDVR_RETURN_IF_ERROR(as_int(1, 1ll << 50)); c.uploads.quota_bytes = uint64_t(n); }
+    else if (flag == "upload-quota-files") { GDVR_RETURN_IF_ERROR(as_int(1, 1ll << 32)); c.uploads.quota_files = uint64_t(n); }
+    else if (flag == "upload-retention-s") { GDVR_RETURN_IF_ERROR(as_int(0, 1ll << 31)); c.uploads.retention_s = double(n); }
     else if (flag == "max-upload-bytes") { GDVR_RETURN_IF_ERROR(as_int(1, 1ll << 40)); c.limits.max_upload_bytes = uint64_t(n); }
     else if (flag == "max-message-bytes") { GDVR_RETURN_IF_ERROR(as_int(1 << 16, 1 << 30)); c.limits.max_message_bytes = int(n); }
     else if (flag == "max-queue") { GDVR_RETURN_IF_ERROR(as_int(1, 1 << 24)); c.limits.max_queue = size_t(n); }
@@ -118,6 +136,7 @@ Expected<ServerConfig> parse_server_flags(int argc, char** argv) {
     return invalid_argument("--tls-cert and --tls-key go together");
   if (!c.tls_ca.empty() && c.tls_cert.empty()) return invalid_argument("--tls-ca needs --tls-cert and --tls-key");
   if (c.db_path.empty()) c.db_path = c.output_root + "/gdvr.db";
+  if (c.uploads.root.empty()) c.uploads.root = c.output_root + "/uploads";
   return c;
 }
 

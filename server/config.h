@@ -14,15 +14,32 @@
 
 namespace gdvr::server {
 
-// Request limits: a request over one gets RESOURCE_EXHAUSTED naming the field.
+// Request limits: a request over one gets RESOURCE_EXHAUSTED naming the
+// field, the flag, and where the value came from. Width, height and spp are
+// checked on what will be rendered (after the scene and params resolve).
 struct Limits {
   int max_width = 8192;
   int max_height = 8192;
   int max_spp = 1 << 16;
   size_t max_frames = 100000;
-  uint64_t max_upload_bytes = 256ull << 20;
+  double max_time_budget_s = 86400;   // a job's time_budget_s (per frame)
+  // frames x width x height x spp: the total samples of a job, what a farm
+  // admin means by "too big" (each per-field limit alone lets 100000 frames
+  // of 8192x8192 at 65536 spp through).
+  uint64_t max_work = 10'000'000'000'000ull;
+  uint64_t max_upload_bytes = 256ull << 20;  // one bundle
   int max_message_bytes = 8 << 20;  // inbound gRPC message size
   size_t max_queue = 1000;          // queued (not yet running) jobs
+};
+
+// Uploaded scene bundles live in their own folder, apart from the operator's
+// asset root, under quotas for the whole folder; bundles no queued or running
+// job names are deleted once older than the retention.
+struct UploadPolicy {
+  std::string root;                       // default: <output-root>/uploads
+  uint64_t quota_bytes = 4ull << 30;      // all bundles together
+  uint64_t quota_files = 10000;           // all bundles together
+  double retention_s = 86400;             // for bundles no unfinished job names
 };
 
 struct ServerConfig {
@@ -37,6 +54,7 @@ struct ServerConfig {
   int concurrency = 1;                     // jobs rendering at once
   int threads = 0;                         // render threads in all; 0: all cores
   Limits limits;
+  UploadPolicy uploads;
   std::vector<std::string> tokens;         // accepted bearer tokens; empty: no auth
   std::string tls_cert, tls_key, tls_ca;   // TLS when cert+key; mTLS when also CA
   double shutdown_grace_s = 10;            // Shutdown() deadline on SIGTERM

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -12,8 +13,11 @@
 #include "core/io/atomic_file.h"
 #include "core/io/image_io.h"
 #include "core/job/job_outputs.h"
+#include "core/report/error_metrics.h"
+#include "core/util/echo_text.h"
 #include "core/util/path_confinement.h"
 #include "server/log.h"
+#include "server/scene_location.h"
 #include "server/status_map.h"
 #include "server/translate.h"
 
@@ -60,6 +64,7 @@ const char* state_name(v1::JobState s) {
     case v1::JOB_STATE_COMPLETED: return "completed";
     case v1::JOB_STATE_FAILED: return "failed";
     case v1::JOB_STATE_CANCELLED: return "cancelled";
+    case v1::JOB_STATE_CANCELLING: return "cancelling";
     default: return "unspecified";
   }
 }
@@ -89,8 +94,8 @@ bool write_file_atomic(const std::string& path, const std::string& data) {
 
 }  // namespace
 
-JobManager::JobManager(ServerConfig config, std::unique_ptr<JobStore> store)
-    : config_(std::move(config)), store_(std::move(store)) {}
+JobManager::JobManager(ServerConfig config, std::unique_ptr<JobStore> store, UploadStore* uploads)
+    : config_(std::move(config)), store_(std::move(store)), uploads_(uploads), client_text_(config_) {}
 
 JobManager::~JobManager() { shutdown(); }
 
@@ -98,49 +103,118 @@ std::string JobManager::job_dir(const std::string& id) const { return config_.ou
 
 // ---- Validation ----
 
-Status JobManager::validate(const v1::JobSpec& spec, JobSpec* core_job, std::vector<int>* frames) const {
+namespace {
+
+std::string with_origin(long long value, const std::string& origin) {
+  return std::to_string(value) + " (from " + origin + ")";
+}
+
+// "86400", "1.5e+13": whole up to a million, else 4 significant digits.
+std::string approx(double v) {
+  char buf[32];
+  if (v == std::floor(v) && std::abs(v) < 1e6) std::snprintf(buf, sizeof buf, "%.0f", v);
+  else std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+}  // namespace
+
+Status JobManager::validate(const v1::JobSpec& spec, JobSpec* core_job, std::vector<int>* frames,
+                            std::string* scene_root) const {
   const Limits& lim = config_.limits;
   if (spec.scene().empty()) return invalid_argument("scene: missing (a .xml path under the asset root)");
+  // ---- What the job sets itself: refused before the scene is read ----
   if (spec.has_width() && spec.width() < 0) return invalid_argument("width: must be >= 0");
   if (spec.has_height() && spec.height() < 0) return invalid_argument("height: must be >= 0");
-  if (spec.width() > lim.max_width)
-    return resource_exhausted("width: " + std::to_string(spec.width()) + " exceeds the server limit of " +
-                              std::to_string(lim.max_width));
-  if (spec.height() > lim.max_height)
-    return resource_exhausted("height: " + std::to_string(spec.height()) + " exceeds the server limit of " +
-                              std::to_string(lim.max_height));
   if (spec.has_spp() && spec.spp() < 0) return invalid_argument("spp: must be >= 0");
+  if (spec.width() > lim.max_width)
+    return resource_exhausted("width: " + with_origin(spec.width(), "the job's width") +
+                              " exceeds the server limit of " + std::to_string(lim.max_width) + " (--max-width)");
+  if (spec.height() > lim.max_height)
+    return resource_exhausted("height: " + with_origin(spec.height(), "the job's height") +
+                              " exceeds the server limit of " + std::to_string(lim.max_height) + " (--max-height)");
   if (spec.spp() > lim.max_spp)
-    return resource_exhausted("spp: " + std::to_string(spec.spp()) + " exceeds the server limit of " +
-                              std::to_string(lim.max_spp));
-  // Scene paths are relative to the asset root; anything escaping it (.., an
-  // absolute path, a symlink out) is refused before core touches the file.
-  fs::path scene = spec.scene();
-  fs::path resolved = scene.is_absolute() ? scene : fs::path(config_.asset_root) / scene;
-  if (!is_inside_root(resolved, config_.asset_root))
-    return invalid_argument("scene: '" + spec.scene() + "' is outside the asset root");
-  std::error_code ec;
-  if (!fs::is_regular_file(resolved, ec)) return not_found("scene: '" + spec.scene() + "' does not exist");
+    return resource_exhausted("spp: " + with_origin(spec.spp(), "the job's spp") + " exceeds the server limit of " +
+                              std::to_string(lim.max_spp) + " (--max-spp)");
+  if (spec.has_time_budget_s() && !(spec.time_budget_s() >= 0 && std::isfinite(spec.time_budget_s())))
+    return invalid_argument("time_budget_s: must be a non-negative number of seconds");
+  if (spec.time_budget_s() > lim.max_time_budget_s)
+    return resource_exhausted("time_budget_s: " + approx(spec.time_budget_s()) +
+                              " s per frame exceeds the server limit of " + approx(lim.max_time_budget_s) +
+                              " s (--max-time-budget)");
+  if (spec.has_frames()) {
+    // Before the job file is parsed, so the message names the server's limit.
+    auto parsed = parse_frame_range(spec.frames(), lim.max_frames);
+    if (!parsed.ok()) {
+      const Status& st = parsed.status();
+      return Status(st.code(), "frames: " + st.message() +
+                                   (st.code() == StatusCode::kResourceExhausted ? " (--max-frames)" : ""));
+    }
+  }
+  // ---- The scene: its name, its folder (asset root or upload bundle) ----
+  auto loc = locate_scene(config_, spec.scene());
+  if (!loc.ok()) return loc.status();
+  if (uploads_ && !loc->upload_hash.empty()) uploads_->touch(loc->upload_hash);  // in use: restart its retention
 
   auto core = to_core_job(spec);
   if (!core.ok()) return core.status();
+  core->scene = loc->relative;
   auto parsed = parse_frame_range(core->frames, lim.max_frames);
   if (!parsed.ok()) {
     const Status& s = parsed.status();
     return Status(s.code(), "frames: " + s.message());
   }
-  if (parsed->empty()) return invalid_argument("frames: '" + core->frames + "' names no frame");
-  if (parsed->size() > lim.max_frames)
-    return resource_exhausted("frames: " + std::to_string(parsed->size()) + " frames exceed the server limit of " +
-                              std::to_string(lim.max_frames));
+  if (parsed->empty()) return invalid_argument("frames: '" + echo_text(core->frames) + "' names no frame");
   JobRunOptions opts;
-  opts.base_dir = config_.asset_root;
-  opts.asset_root = config_.asset_root;
-  GDVR_RETURN_IF_ERROR(validate_job(*core, opts));
+  opts.base_dir = loc->root;
+  opts.asset_root = loc->root;
+  // ---- What will be rendered, once the scene and its params resolve ----
+  auto resolved = resolve_job(*core, opts);
+  if (!resolved.ok()) return resolved.status();
+  const ResolvedRender& r = *resolved;
+  if (r.width.value > lim.max_width)
+    return resource_exhausted("width: " + with_origin(r.width.value, r.width.origin) + " exceeds the server limit of " +
+                              std::to_string(lim.max_width) + " (--max-width)");
+  if (r.height.value > lim.max_height)
+    return resource_exhausted("height: " + with_origin(r.height.value, r.height.origin) +
+                              " exceeds the server limit of " + std::to_string(lim.max_height) + " (--max-height)");
+  if (r.spp.value > lim.max_spp)
+    return resource_exhausted("spp: " + with_origin(r.spp.value, r.spp.origin) + " exceeds the server limit of " +
+                              std::to_string(lim.max_spp) + " (--max-spp)");
+  // Samples in all (a double: the product of four limits overflows 64 bits).
+  const double work = double(parsed->size()) * double(r.width.value) * double(r.height.value) * double(r.spp.value);
+  if (work > double(lim.max_work))
+    return resource_exhausted("job: " + std::to_string(parsed->size()) + " frames x " + std::to_string(r.width.value) +
+                              "x" + std::to_string(r.height.value) + " x " + std::to_string(r.spp.value) + " spp = " +
+                              approx(work) + " samples exceed the server limit of " + approx(double(lim.max_work)) +
+                              " (--max-work); width from " + r.width.origin + ", height from " + r.height.origin +
+                              ", spp from " + r.spp.origin);
   GDVR_RETURN_IF_ERROR(JobOutputs::validate(*core, {config_.ocio_config, config_.asset_root}, parsed->front()));
   if (core_job) *core_job = std::move(*core);
   if (frames) *frames = std::move(*parsed);
+  if (scene_root) *scene_root = loc->root;
   return Status::Ok();
+}
+
+Status JobManager::locate_core(Job* job) {
+  auto loc = locate_scene(config_, job->spec.scene());
+  if (!loc.ok()) return loc.status();
+  job->core.scene = loc->relative;
+  job->scene_root = loc->root;
+  return Status::Ok();
+}
+
+std::set<std::string> JobManager::uploads_in_use() const {
+  std::set<std::string> out;
+  const std::string prefix = kUploadScenePrefix;
+  std::lock_guard<std::mutex> lock(mu_);
+  for (const auto& [id, j] : jobs_) {
+    if (is_terminal(j->state)) continue;
+    const std::string& scene = j->spec.scene();
+    if (scene.compare(0, prefix.size(), prefix) == 0)
+      out.insert(scene.substr(prefix.size(), scene.find('/', prefix.size()) - prefix.size()));
+  }
+  return out;
 }
 
 // ---- Registry ----
@@ -183,6 +257,9 @@ Status JobManager::recover() {
         auto frames = parse_frame_range(job->core.frames);
         if (frames.ok()) job->frames = std::move(*frames);
         else st = frames.status();
+        // A finished job's scene may be gone (an expired upload); only an
+        // unfinished one needs it.
+        if (st.ok() && !is_terminal(job->state)) st = locate_core(job.get());
       } else {
         st = core.status();
       }
@@ -195,6 +272,7 @@ Status JobManager::recover() {
     }
     job->progress.set_frames_total(int(job->frames.size()));
     job->progress.set_frames_done(int(job->final_frames.size()));
+    job->progress.set_frames_rendered(int(job->final_frames.size()));
     job->progress.set_fraction(job->frames.empty() ? 0 : double(job->final_frames.size()) / job->frames.size());
     job->progress.set_eta_seconds(-1);
     Job* j = job.get();
@@ -203,6 +281,11 @@ Status JobManager::recover() {
     if (!st.ok()) {
       finish_locked(j, v1::JOB_STATE_FAILED, "cannot resume: " + st.message(),
                     grpc_code_name(to_grpc_code(st.code())));
+      continue;
+    }
+    if (j->state == v1::JOB_STATE_CANCELLING) {
+      // A client cancelled it and the server stopped before the render did.
+      finish_locked(j, v1::JOB_STATE_CANCELLED, "cancelled by a client", "CANCELLED");
       continue;
     }
     // RUNNING at the time of a crash: back to the queue, resuming.
@@ -224,7 +307,7 @@ void JobManager::shutdown() {
     if (stopping_ && workers_.empty()) return;
     stopping_ = true;
     for (auto& [id, job] : jobs_)
-      if (job->state == v1::JOB_STATE_RUNNING) job->cancel = true;
+      if (job->state == v1::JOB_STATE_RUNNING || job->state == v1::JOB_STATE_CANCELLING) job->cancel = true;
   }
   cv_.notify_all();
   for (auto& w : workers_) w.join();
@@ -236,8 +319,8 @@ Expected<JobManager::Submitted> JobManager::submit(const std::string& key, const
   auto existing = [&]() -> Expected<Submitted> {
     const Job& j = *jobs_.at(by_key_.at(key));
     if (j.spec_json != spec_json)
-      return failed_precondition("idempotency_key: '" + key + "' was already used for a different job (" + j.id +
-                                 ")");
+      return failed_precondition("idempotency_key: '" + echo_text(key) + "' was already used for a different job (" +
+                                 j.id + ")");
     return Submitted{to_proto_locked(j), true};
   };
   {
@@ -248,7 +331,8 @@ Expected<JobManager::Submitted> JobManager::submit(const std::string& key, const
   // Validation loads the scene: done outside the lock so other calls proceed.
   JobSpec core;
   std::vector<int> frames;
-  GDVR_RETURN_IF_ERROR(validate(spec, &core, &frames));
+  std::string scene_root;
+  GDVR_RETURN_IF_ERROR(validate(spec, &core, &frames, &scene_root));
 
   std::lock_guard<std::mutex> lock(mu_);
   if (!key.empty() && by_key_.count(key)) return existing();  // a concurrent retry won
@@ -263,6 +347,7 @@ Expected<JobManager::Submitted> JobManager::submit(const std::string& key, const
   job->spec = spec;
   job->spec_json = spec_json;
   job->core = std::move(core);
+  job->scene_root = std::move(scene_root);
   job->frames = std::move(frames);
   job->priority = job->core.priority;
   job->seq = next_seq_++;
@@ -291,7 +376,7 @@ Expected<JobManager::Submitted> JobManager::submit(const std::string& key, const
 Expected<v1::Job> JobManager::get(const std::string& id) const {
   std::lock_guard<std::mutex> lock(mu_);
   auto it = jobs_.find(id);
-  if (it == jobs_.end()) return not_found("job_id: no job '" + id + "'");
+  if (it == jobs_.end()) return not_found("job_id: no job '" + echo_text(id) + "'");
   return to_proto_locked(*it->second);
 }
 
@@ -301,7 +386,7 @@ Expected<v1::ListJobsResponse> JobManager::list(const v1::ListJobsRequest& req) 
   if (!req.page_token().empty()) {
     char* end = nullptr;
     below = std::strtoll(req.page_token().c_str(), &end, 10);
-    if (*end != '\0' || below <= 0) return invalid_argument("page_token: '" + req.page_token() + "' is not valid");
+    if (*end != '\0' || below <= 0) return invalid_argument("page_token: '" + echo_text(req.page_token()) + "' is not valid");
   }
   std::lock_guard<std::mutex> lock(mu_);
   std::vector<const Job*> all;
@@ -322,17 +407,23 @@ Expected<v1::ListJobsResponse> JobManager::list(const v1::ListJobsRequest& req) 
 Expected<v1::Job> JobManager::cancel(const std::string& id) {
   std::unique_lock<std::mutex> lock(mu_);
   auto it = jobs_.find(id);
-  if (it == jobs_.end()) return not_found("job_id: no job '" + id + "'");
+  if (it == jobs_.end()) return not_found("job_id: no job '" + echo_text(id) + "'");
   Job* j = it->second.get();
   if (is_terminal(j->state))
     return failed_precondition("job '" + id + "' is already " + state_name(j->state));
   if (j->state == v1::JOB_STATE_QUEUED) {
     finish_locked(j, v1::JOB_STATE_CANCELLED, "cancelled by a client before it started", "CANCELLED");
-  } else {
+  } else if (j->state == v1::JOB_STATE_RUNNING) {
+    // The render stops at its next tile; until then the job is CANCELLING,
+    // so neither this answer nor GetJob says RUNNING. Persisted, so that a
+    // server stopped in between still ends the job as cancelled.
     j->cancel_requested = true;
-    j->cancel = true;  // run_job sees it at the next tile
+    j->cancel = true;
+    j->state = v1::JOB_STATE_CANCELLING;
+    j->reason = "cancel requested by a client; stopping at the next tile";
+    (void)persist_state_locked(*j);
     log_event("info", "job_cancel_requested", {{"job", id}});
-  }
+  }  // CANCELLING already: the same answer again
   v1::Job out = to_proto_locked(*j);
   cv_.notify_all();
   return out;
@@ -375,8 +466,8 @@ void JobManager::run(Job* job) {
   int hw = int(std::thread::hardware_concurrency());
   int threads = config_.threads > 0 ? config_.threads : hw;
   opts.threads = config_.concurrency > 1 ? std::max(1, threads / config_.concurrency) : config_.threads;
-  opts.base_dir = config_.asset_root;
-  opts.asset_root = config_.asset_root;
+  opts.base_dir = job->scene_root;
+  opts.asset_root = job->scene_root;
   opts.skip_frames = job->skipped;  // only this thread changes skipped while RUNNING
   std::string dir = job_dir(job->id);
   std::error_code ec;
@@ -417,6 +508,7 @@ void JobManager::run(Job* job) {
       rec.final_us = now_us();
       job->final_frames[out.frame] = rec;
       job->progress.set_frames_done(int(job->final_frames.size()));
+      job->progress.set_frames_rendered(std::max(job->progress.frames_rendered(), int(job->final_frames.size())));
       ++job->progress_seq;
       write_stats_json(*job);
     }
@@ -433,9 +525,15 @@ void JobManager::run(Job* job) {
     {
       std::lock_guard<std::mutex> lock(mu_);
       to_proto(p, &job->progress);
-      // Resumed runs count from zero in core; the job counts every final frame.
-      job->progress.set_frames_done(std::max(p.frames_done, int(job->final_frames.size())));
-      job->progress.set_frames_total(int(job->frames.size()));
+      // Two stages, two counts (see Progress in the proto): core counts
+      // rendered frames (including those final before a resume, and for
+      // tgpt the window frames a resume renders again); final frames are
+      // the job's own records.
+      const int total = int(job->frames.size());
+      const int final_count = int(job->final_frames.size());
+      job->progress.set_frames_done(final_count);
+      job->progress.set_frames_rendered(std::min(total, std::max(p.frames_done, final_count)));
+      job->progress.set_frames_total(total);
       ++job->progress_seq;
     }
     auto now = std::chrono::steady_clock::now();
@@ -529,7 +627,7 @@ v1::Job JobManager::to_proto_locked(const Job& j) const {
   for (int f : j.frames) out.add_frames(f);
   for (const auto& [f, rec] : j.final_frames) out.add_final_frames(f);
   *out.mutable_progress() = j.progress;
-  out.set_reason(j.reason);
+  out.set_reason(client_text_(j.reason));
   out.set_created_unix_ms(j.created_ms);
   out.set_started_unix_ms(j.started_ms);
   out.set_finished_unix_ms(j.finished_ms);
@@ -549,7 +647,7 @@ Expected<std::vector<JobManager::Artifact>> JobManager::artifacts(const std::str
   std::vector<Artifact> out;
   std::lock_guard<std::mutex> lock(mu_);
   auto it = jobs_.find(id);
-  if (it == jobs_.end()) return not_found("job_id: no job '" + id + "'");
+  if (it == jobs_.end()) return not_found("job_id: no job '" + echo_text(id) + "'");
   const Job& j = *it->second;
   // Names come from the job's own records, never from the request, so a
   // client cannot name a path outside the job's folder.
@@ -633,7 +731,7 @@ Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<boo
   {
     std::lock_guard<std::mutex> lock(mu_);
     auto it = jobs_.find(req.job_id());
-    if (it == jobs_.end()) return not_found("job_id: no job '" + req.job_id() + "'");
+    if (it == jobs_.end()) return not_found("job_id: no job '" + echo_text(req.job_id()) + "'");
     job = it->second.get();  // jobs are never erased: the pointer stays valid
   }
   int next_frame = req.has_from_frame() ? req.from_frame() : INT32_MIN;
@@ -649,13 +747,15 @@ Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<boo
     uint64_t progress_seq;
     std::string reason, code;
     int queue_pos;
+    int final_before;  // final frames numbered below next_frame
     bool started;
     std::vector<int> skipped;
     {
       std::unique_lock<std::mutex> lock(mu_);
       state = job->state;
-      for (auto it = job->final_frames.lower_bound(next_frame); it != job->final_frames.end(); ++it)
-        frames.emplace_back(it->first, it->second);
+      auto first = job->final_frames.lower_bound(next_frame);
+      final_before = int(std::distance(job->final_frames.begin(), first));
+      for (auto it = first; it != job->final_frames.end(); ++it) frames.emplace_back(it->first, it->second);
       progress = job->progress;
       progress_seq = job->progress_seq;
       reason = job->reason;
@@ -680,16 +780,22 @@ Status JobManager::watch(const v1::WatchJobRequest& req, const std::function<boo
       started_sent = true;
     }
     for (const auto& [f, rec] : frames) {
-      if (!send_frame(*job, f, rec, req.include_raw_rgb(), send, progress)) return Status::Ok();
+      // Each frame carries the count as of itself (frames become final in
+      // frame order), not the snapshot's: a batch of frames solved together
+      // must not all say "48/48" while 17 are still on their way.
+      v1::Progress at_frame = progress;
+      at_frame.set_frames_done(++final_before);
+      at_frame.set_frames_rendered(std::max(at_frame.frames_rendered(), final_before));
+      if (!send_frame(*job, f, rec, req.include_raw_rgb(), send, at_frame)) return Status::Ok();
       next_frame = f + 1;
     }
     if (is_terminal(state)) {
       ev.Clear();
       ev.set_job_id(job->id);
       if (state == v1::JOB_STATE_COMPLETED) *ev.mutable_completed()->mutable_progress() = progress;
-      else if (state == v1::JOB_STATE_CANCELLED) ev.mutable_cancelled()->set_reason(reason);
+      else if (state == v1::JOB_STATE_CANCELLED) ev.mutable_cancelled()->set_reason(client_text_(reason));
       else {
-        ev.mutable_failed()->set_reason(reason);
+        ev.mutable_failed()->set_reason(client_text_(reason));
         ev.mutable_failed()->set_code(code);
       }
       (void)send(ev);

@@ -13,16 +13,22 @@
 #include <thread>
 #include <vector>
 
+#include <set>
+
 #include "core/job/job_runner.h"
 #include "gdvr/v1/render_service.pb.h"
+#include "server/client_message.h"
 #include "server/config.h"
 #include "server/job_store.h"
+#include "server/upload_store.h"
 
 namespace gdvr::server {
 
 class JobManager {
  public:
-  JobManager(ServerConfig config, std::unique_ptr<JobStore> store);
+  // `uploads` (may be null: no uploaded scenes are touched) restarts a
+  // bundle's retention when a job names it.
+  JobManager(ServerConfig config, std::unique_ptr<JobStore> store, UploadStore* uploads = nullptr);
   ~JobManager();
 
   // Rebuilds the registry from the store; unfinished jobs go back to the
@@ -40,7 +46,12 @@ class JobManager {
   Expected<Submitted> submit(const std::string& idempotency_key, const v1::JobSpec& spec);
   Expected<v1::Job> get(const std::string& id) const;
   Expected<v1::ListJobsResponse> list(const v1::ListJobsRequest& request) const;
+  // A queued job becomes CANCELLED; a running one CANCELLING (it stops at
+  // the next tile, then is CANCELLED). Returns the job in that new state.
   Expected<v1::Job> cancel(const std::string& id);
+  // The upload bundles (hashes) that queued or running jobs name: kept by
+  // UploadStore::sweep whatever their age.
+  std::set<std::string> uploads_in_use() const;
 
   // Streams the job's events through `send` (false: the client went away)
   // until it reaches a terminal state. `client_gone` is polled while idle.
@@ -48,8 +59,15 @@ class JobManager {
   Status watch(const v1::WatchJobRequest& request, const std::function<bool(const v1::JobEvent&)>& send,
                const std::function<bool()>& client_gone);
 
-  // Checks a spec against the server limits and core's validate_job.
-  Status validate(const v1::JobSpec& spec, JobSpec* core_job, std::vector<int>* frames) const;
+  // Checks a spec against the server limits and core's validation. The
+  // limits apply to what will be rendered: width, height and spp after the
+  // scene file and the job's params resolve, and their product with the
+  // frame count (--max-work). `core_job` comes back with its scene relative
+  // to `scene_root` (the asset root, or an uploaded bundle's folder).
+  Status validate(const v1::JobSpec& spec, JobSpec* core_job, std::vector<int>* frames,
+                  std::string* scene_root = nullptr) const;
+  // What clients see of an error text (server paths hidden, bounded).
+  const ClientMessageFilter& client_text() const { return client_text_; }
 
   struct Artifact {
     std::string file;  // a plain name inside the job's folder
@@ -71,7 +89,8 @@ class JobManager {
     std::string id, idempotency_key;
     v1::JobSpec spec;
     std::string spec_json;
-    JobSpec core;
+    JobSpec core;            // its scene relative to scene_root
+    std::string scene_root;  // the asset root, or the uploaded bundle's folder
     std::vector<int> frames;
     v1::JobState state = v1::JOB_STATE_QUEUED;
     int priority = 0;
@@ -98,8 +117,12 @@ class JobManager {
   bool send_frame(const Job& job, int frame, const FrameRecord& rec, bool raw,
                   const std::function<bool(const v1::JobEvent&)>& send, const v1::Progress& progress);
 
+  Status locate_core(Job* job);  // sets core.scene and scene_root from spec (recover)
+
   ServerConfig config_;
   std::unique_ptr<JobStore> store_;
+  UploadStore* uploads_;
+  ClientMessageFilter client_text_;
   mutable std::mutex mu_;
   std::condition_variable cv_;  // any job change; workers and watchers wait on it
   std::map<std::string, std::unique_ptr<Job>> jobs_;

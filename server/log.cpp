@@ -5,10 +5,18 @@
 #include <ctime>
 #include <mutex>
 
+#include "core/util/echo_text.h"
+
 namespace gdvr::server {
 namespace {
 
-std::string quote_if_needed(const std::string& v) {
+// A value is cut and its control characters escaped first: values echo
+// client input (a 1.9 MB scene name once made a 1.9 MB log line, and a NUL
+// byte went to the log raw).
+constexpr size_t kMaxLogValueChars = 2000;
+
+std::string quote_if_needed(const std::string& raw) {
+  const std::string v = echo_text(raw, kMaxLogValueChars);
   bool plain = !v.empty();
   for (char c : v)
     if (c == ' ' || c == '"' || c == '=' || c == '\n' || c == '\t') plain = false;

@@ -1,5 +1,7 @@
 // Structured logs: one line per event on stderr, `key=value` pairs, values
 // quoted when they contain spaces, so that `grep job=...` follows a job.
+// Values are bounded and their control characters escaped (log.cpp): one
+// event is always one line of reasonable length.
 #pragma once
 
 #include <initializer_list>

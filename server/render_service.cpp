@@ -3,22 +3,22 @@
 #include <fstream>
 #include <vector>
 
+#include "core/util/echo_text.h"
 #include "server/log.h"
 #include "server/scene_upload.h"
 #include "server/status_map.h"
 #include "server/translate.h"
 
 namespace gdvr::server {
-namespace {
 
-grpc::Status logged(const char* rpc, const std::string& job, const grpc::Status& st) {
-  if (!st.ok())
-    log_event("warn", "rpc_error", {{"rpc", rpc}, {"job", job}, {"code", grpc_code_name(st.error_code())},
-                                    {"message", st.error_message()}});
-  return st;
+// The log gets the message as it is (absolute paths and all, bounded by
+// log_event); the client gets it through the ClientMessageFilter.
+grpc::Status RenderServiceImpl::logged(const char* rpc, const std::string& job, const grpc::Status& st) const {
+  if (st.ok()) return st;
+  log_event("warn", "rpc_error", {{"rpc", rpc}, {"job", job}, {"code", grpc_code_name(st.error_code())},
+                                  {"message", st.error_message()}});
+  return grpc::Status(st.error_code(), jobs_->client_text()(st.error_message()));
 }
-
-}  // namespace
 
 grpc::Status RenderServiceImpl::check_auth(grpc::ServerContext* ctx) const {
   if (auth_ && !auth_->allowed(ctx))
@@ -31,7 +31,8 @@ grpc::Status RenderServiceImpl::SubmitJob(grpc::ServerContext* ctx, const v1::Su
   if (auto st = check_auth(ctx); !st.ok()) return st;
   if (req->idempotency_key().size() > 256)
     return logged("SubmitJob", "", grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                                                "idempotency_key: longer than 256 characters"));
+                                                "idempotency_key: longer than 256 characters ('" +
+                                                    echo_text(req->idempotency_key()) + "')"));
   v1::JobSpec spec;
   if (req->has_job()) {
     spec = req->job();
@@ -90,7 +91,9 @@ grpc::Status RenderServiceImpl::UploadScene(grpc::ServerContext* ctx,
                                             grpc::ServerReader<v1::UploadSceneChunk>* reader,
                                             v1::UploadSceneResponse* resp) {
   if (auto st = check_auth(ctx); !st.ok()) return st;
-  SceneBundleWriter bundle(config_.asset_root, config_.limits.max_upload_bytes);
+  // Expired bundles go first, so their room counts for this upload.
+  uploads_->sweep(jobs_->uploads_in_use());
+  SceneBundleWriter bundle(uploads_, config_.limits.max_upload_bytes);
   v1::UploadSceneChunk chunk;
   while (reader->Read(&chunk)) {
     Status st = bundle.add(chunk.scene_file(), chunk.path(), chunk.data());
@@ -104,7 +107,9 @@ grpc::Status RenderServiceImpl::UploadScene(grpc::ServerContext* ctx,
   resp->set_total_bytes(done->total_bytes);
   resp->set_files(done->files);
   log_event("info", "scene_uploaded", {{"hash", done->hash}, {"bytes", std::to_string(done->total_bytes)},
-                                       {"files", std::to_string(done->files)}});
+                                       {"files", std::to_string(done->files)},
+                                       {"upload_folder_bytes", std::to_string(uploads_->used_bytes())},
+                                       {"upload_folder_files", std::to_string(uploads_->used_files())}});
   return grpc::Status::OK;
 }
 

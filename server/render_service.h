@@ -7,13 +7,15 @@
 #include "server/auth.h"
 #include "server/config.h"
 #include "server/job_manager.h"
+#include "server/upload_store.h"
 
 namespace gdvr::server {
 
 class RenderServiceImpl final : public v1::RenderService::Service {
  public:
-  RenderServiceImpl(JobManager* jobs, std::shared_ptr<TokenAuth> auth, const ServerConfig& config)
-      : jobs_(jobs), auth_(std::move(auth)), config_(config) {}
+  RenderServiceImpl(JobManager* jobs, UploadStore* uploads, std::shared_ptr<TokenAuth> auth,
+                    const ServerConfig& config)
+      : jobs_(jobs), uploads_(uploads), auth_(std::move(auth)), config_(config) {}
 
   grpc::Status SubmitJob(grpc::ServerContext* ctx, const v1::SubmitJobRequest* req,
                          v1::SubmitJobResponse* resp) override;
@@ -30,8 +32,11 @@ class RenderServiceImpl final : public v1::RenderService::Service {
 
  private:
   grpc::Status check_auth(grpc::ServerContext* ctx) const;
+  // Logs a failed call and returns what the client is shown of it.
+  grpc::Status logged(const char* rpc, const std::string& job, const grpc::Status& st) const;
 
   JobManager* jobs_;
+  UploadStore* uploads_;
   std::shared_ptr<TokenAuth> auth_;
   const ServerConfig& config_;
 };

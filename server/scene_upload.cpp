@@ -3,72 +3,88 @@
 #include <openssl/evp.h>
 
 #include <filesystem>
-#include <random>
 #include <vector>
+
+#include "core/util/echo_text.h"
+#include "server/scene_location.h"
 
 namespace gdvr::server {
 namespace fs = std::filesystem;
 
 Status check_bundle_path(const std::string& path) {
   if (path.empty()) return invalid_argument("path: empty file name in the bundle");
-  if (path.size() > 512) return invalid_argument("path: longer than 512 characters");
+  const std::string shown = "path: '" + echo_text(path) + "'";
+  if (path.size() > 512) return invalid_argument(shown + " is longer than 512 characters");
   if (path[0] == '/' || path.find('\\') != std::string::npos || path.find(':') != std::string::npos)
-    return invalid_argument("path: '" + path + "' must be relative and '/'-separated");
+    return invalid_argument(shown + " must be relative and '/'-separated");
   size_t start = 0;
   while (start <= path.size()) {
     size_t end = path.find('/', start);
     if (end == std::string::npos) end = path.size();
     std::string part = path.substr(start, end - start);
     if (part.empty() || part == "." || part == "..")
-      return invalid_argument("path: '" + path + "' has an empty, '.' or '..' component");
+      return invalid_argument(shown + " has an empty, '.' or '..' component");
+    // NAME_MAX: such a file cannot be written, and that is the request's
+    // fault, not the server's.
+    if (part.size() > 255) return invalid_argument(shown + " has a component longer than 255 bytes");
     for (unsigned char c : part)
-      if (c < 0x20 || c == 0x7f) return invalid_argument("path: '" + path + "' has a control character");
+      if (c < 0x20 || c == 0x7f) return invalid_argument(shown + " has a control character");
     start = end + 1;
   }
   return Status::Ok();
 }
 
-SceneBundleWriter::SceneBundleWriter(std::string asset_root, uint64_t max_bytes)
-    : asset_root_(std::move(asset_root)), max_bytes_(max_bytes) {
-  std::random_device rd;
-  char buf[40];
-  std::snprintf(buf, sizeof buf, ".incoming-%08x%08x", rd(), rd());
-  staging_ = asset_root_ + "/uploads/" + buf;
-}
+SceneBundleWriter::SceneBundleWriter(UploadStore* store, uint64_t max_bytes)
+    : store_(store), staging_(store->new_staging_dir()), max_bytes_(max_bytes) {}
 
 SceneBundleWriter::~SceneBundleWriter() {
   out_.close();
   if (!done_) {
     std::error_code ec;
     fs::remove_all(staging_, ec);
+    store_->release(reserved_bytes_, reserved_files_);
   }
 }
 
 Status SceneBundleWriter::add(const std::string& scene_file, const std::string& path, const std::string& data) {
   if (!scene_file.empty()) {
     if (!scene_file_.empty() && scene_file != scene_file_)
-      return invalid_argument("scene_file: changed from '" + scene_file_ + "' to '" + scene_file + "' mid-upload");
+      return invalid_argument("scene_file: changed from '" + echo_text(scene_file_) + "' to '" + echo_text(scene_file) +
+                              "' mid-upload");
     scene_file_ = scene_file;
   }
   if (path.empty() && data.empty()) return Status::Ok();
   std::string p = path.empty() ? current_ : path;
+  if (p.empty()) return invalid_argument("path: the first chunk with data must name its file");
   if (p != current_) {
     GDVR_RETURN_IF_ERROR(check_bundle_path(p));
-    if (files_.count(p)) return invalid_argument("path: '" + p + "' sent twice (send each file's chunks together)");
+    if (files_.count(p))
+      return invalid_argument("path: '" + echo_text(p) + "' sent twice (send each file's chunks together)");
+    // "a" and "a/b" cannot both be files.
+    for (const auto& [f, size] : files_) {
+      if (p.compare(0, f.size() + 1, f + "/") == 0 || f.compare(0, p.size() + 1, p + "/") == 0)
+        return invalid_argument("path: '" + echo_text(p) + "' and '" + echo_text(f) +
+                                "' cannot both be in a bundle (one would be a file and a folder)");
+    }
+    GDVR_RETURN_IF_ERROR(store_->reserve(0, 1));
+    ++reserved_files_;
     out_.close();
     fs::path target = fs::path(staging_) / p;
     std::error_code ec;
     fs::create_directories(target.parent_path(), ec);
     out_.open(target, std::ios::binary | std::ios::trunc);
-    if (!out_) return internal_error("cannot write upload staging file for '" + p + "'");
+    if (!out_) return internal_error("upload: cannot write the staging file for '" + echo_text(p) + "' under " + staging_);
     current_ = p;
     files_[p] = 0;
   }
   total_ += data.size();
   if (total_ > max_bytes_)
-    return resource_exhausted("upload: bundle exceeds the server limit of " + std::to_string(max_bytes_) + " bytes");
+    return resource_exhausted("upload: bundle exceeds the server limit of " + std::to_string(max_bytes_) +
+                              " bytes (--max-upload-bytes)");
+  GDVR_RETURN_IF_ERROR(store_->reserve(data.size(), 0));
+  reserved_bytes_ += data.size();
   out_.write(data.data(), std::streamsize(data.size()));
-  if (!out_) return internal_error("upload: write failed for '" + p + "'");
+  if (!out_) return internal_error("upload: write failed for '" + echo_text(p) + "' under " + staging_);
   files_[p] += data.size();
   return Status::Ok();
 }
@@ -76,7 +92,8 @@ Status SceneBundleWriter::add(const std::string& scene_file, const std::string& 
 Expected<UploadedBundle> SceneBundleWriter::finish() {
   out_.close();
   if (scene_file_.empty()) return invalid_argument("scene_file: missing (name the bundle's scene .xml)");
-  if (!files_.count(scene_file_)) return invalid_argument("scene_file: '" + scene_file_ + "' is not in the bundle");
+  if (!files_.count(scene_file_))
+    return invalid_argument("scene_file: '" + echo_text(scene_file_) + "' is not in the bundle");
   // SHA-256 over (path, NUL, size, NUL, bytes) of every file in path order.
   std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> md(EVP_MD_CTX_new(), EVP_MD_CTX_free);
   EVP_DigestInit_ex(md.get(), EVP_sha256(), nullptr);
@@ -99,16 +116,19 @@ Expected<UploadedBundle> SceneBundleWriter::finish() {
     hex += kHex[digest[i] >> 4];
     hex += kHex[digest[i] & 15];
   }
-  std::string final_dir = asset_root_ + "/uploads/" + hex;
+  std::string final_dir = (fs::path(store_->root()) / hex).string();
   std::error_code ec;
   if (fs::exists(final_dir, ec)) {
-    fs::remove_all(staging_, ec);  // same content already there
+    // Same content already there: it counts once, and its retention restarts.
+    fs::remove_all(staging_, ec);
+    store_->release(reserved_bytes_, reserved_files_);
+    store_->touch(hex);
   } else {
     fs::rename(staging_, final_dir, ec);
-    if (ec) return internal_error("upload: cannot move the bundle into place: " + ec.message());
+    if (ec) return internal_error("upload: cannot move the bundle into " + final_dir + ": " + ec.message());
   }
   done_ = true;
-  return UploadedBundle{hex, "uploads/" + hex + "/" + scene_file_, total_, int(files_.size())};
+  return UploadedBundle{hex, std::string(kUploadScenePrefix) + hex + "/" + scene_file_, total_, int(files_.size())};
 }
 
 }  // namespace gdvr::server

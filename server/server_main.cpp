@@ -2,22 +2,28 @@
 // job manager, gRPC server (health, reflection, auth), signals.
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
-#include <grpcpp/health_check_service_interface.h>
 #include <pthread.h>
 #include <signal.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
+#include "core/util/path_confinement.h"
 #include "server/auth.h"
+#include "server/call_tracker.h"
 #include "server/config.h"
+#include "server/health_service.h"
 #include "server/job_manager.h"
 #include "server/job_store.h"
 #include "server/log.h"
+#include "server/reflection_v1.h"
 #include "server/render_service.h"
+#include "server/upload_store.h"
 
 namespace fs = std::filesystem;
 using namespace gdvr::server;
@@ -66,16 +72,31 @@ int main(int argc, char** argv) {
   fs::create_directories(config.output_root, ec);
   if (ec) return fail("--output-root: cannot create '" + config.output_root + "': " + ec.message());
 
+  // Uploads are kept out of the operator's asset root: a bundle must not
+  // become an asset other jobs can name, nor fill the operator's folder.
+  if (gdvr::is_inside_root(config.uploads.root, config.asset_root))
+    log_event("warn", "upload_root_inside_asset_root",
+              {{"upload_root", config.uploads.root}, {"asset_root", config.asset_root},
+               {"hint", "set --upload-root (or --output-root) outside --asset-root"}});
+  UploadStore uploads(config.uploads);
+  if (auto st = uploads.open(); !st.ok()) return fail(st.message());
+
   auto store = JobStore::open(config.db_path);
   if (!store.ok()) return fail(store.status().message());
-  JobManager jobs(config, std::move(*store));
+  JobManager jobs(config, std::move(*store), &uploads);
   if (auto st = jobs.recover(); !st.ok()) return fail(st.message());
+  uploads.sweep(jobs.uploads_in_use());
 
   auto auth = std::make_shared<TokenAuth>(config.tokens);
-  RenderServiceImpl service(&jobs, auth, config);
+  RenderServiceImpl service(&jobs, &uploads, auth, config);
+  // Our own health service (see health_service.h); the service name is
+  // registered too, for probes that ask about gdvr.v1.RenderService.
+  const std::string kServiceName = gdvr::v1::RenderService::service_full_name();
+  HealthService health({"", kServiceName});
+  ReflectionV1Service reflection_v1({kServiceName, "grpc.health.v1.Health", "grpc.reflection.v1.ServerReflection",
+                                     "grpc.reflection.v1alpha.ServerReflection"});
 
-  grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();  // v1alpha
   grpc::ServerBuilder builder;
 
   std::shared_ptr<grpc::ServerCredentials> creds;
@@ -97,6 +118,8 @@ int main(int argc, char** argv) {
   int port = 0;
   builder.AddListeningPort(config.listen, creds, &port);
   builder.RegisterService(&service);
+  builder.RegisterService(&health);
+  builder.RegisterService(&reflection_v1);
   builder.SetMaxReceiveMessageSize(config.limits.max_message_bytes);
   builder.SetMaxSendMessageSize(std::max(config.limits.max_message_bytes, 4 << 20));
   // Watch streams can be quiet for minutes while a frame renders: ping so
@@ -107,13 +130,14 @@ int main(int argc, char** argv) {
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PINGS_WITHOUT_DATA, 0);
   builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS, 10000);
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  CallTracker calls;
+  interceptors.push_back(calls.interceptor_factory());
   if (auth->enabled()) interceptors.push_back(std::make_unique<AuthInterceptorFactory>(auth));
   builder.experimental().SetInterceptorCreators(std::move(interceptors));
 
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) return fail("--listen: cannot listen on '" + config.listen + "'");
-  grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
-  health->SetServingStatus(true);
+  health.set_serving(true);
   jobs.start();
   if (!config.port_file.empty()) {
     // Write then rename: a test polling for the file never reads half a port.
@@ -131,14 +155,27 @@ int main(int argc, char** argv) {
   sigwait(&stop_signals, &sig);
   log_event("info", "shutdown_begin", {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"}});
   // ---- Graceful shutdown ----
-  // Probes see NOT_SERVING first, so load balancers drain us.
-  health->SetServingStatus(false);
+  // Probes see NOT_SERVING first, so load balancers drain us; open health
+  // Watch streams get it and then end, so they do not hold the shutdown.
+  health.shutdown();
   // Stops new work, cancels running renders (their final frames are already
   // persisted; the job stays queued for the next start) and ends watch streams.
   jobs.shutdown();
   auto deadline = std::chrono::system_clock::now() +
                   std::chrono::milliseconds(int64_t(config.shutdown_grace_s * 1000));
+  // Calls still in flight (a download, a submit) get until the deadline. Once
+  // none is left, connections are closed at once instead of waiting for
+  // idle clients to answer the graceful GOAWAY (see call_tracker.h).
+  std::atomic<bool> shut_down{false};
+  std::thread closer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // let Shutdown() begin
+    while (!shut_down && calls.active() > 0 && std::chrono::system_clock::now() < deadline)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (!shut_down) grpc_server_cancel_all_calls(server->c_server());
+  });
   server->Shutdown(deadline);
+  shut_down = true;
+  closer.join();
   server->Wait();
   log_event("info", "shutdown_done");
   return 0;

@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/util/echo_text.h"
+
 namespace gdvr::server {
 namespace {
 
@@ -18,7 +20,9 @@ std::string find_unknown_field(const nlohmann::json& j, const google::protobuf::
       for (int i = 0; i < desc->field_count() && !field; ++i)
         if (desc->field(i)->json_name() == it.key()) field = desc->field(i);
     }
-    std::string path = prefix.empty() ? it.key() : prefix + "." + it.key();
+    // Keys are the client's: echoed bounded (a 20,000-character key once
+    // made a status too large for the client to receive).
+    std::string path = prefix.empty() ? echo_text(it.key()) : prefix + "." + echo_text(it.key());
     if (!field) return path;
     if (field->is_map()) continue;
     if (field->message_type()) {
@@ -57,7 +61,7 @@ Expected<v1::JobSpec> job_spec_from_json(const std::string& json_text, const std
   if (!unknown.empty()) return invalid_argument(origin + ": unknown field '" + unknown + "'");
   v1::JobSpec spec;
   auto st = google::protobuf::util::JsonStringToMessage(json_text, &spec);
-  if (!st.ok()) return invalid_argument(origin + ": " + std::string(st.message()));
+  if (!st.ok()) return invalid_argument(origin + ": " + echo_text(std::string(st.message()), 2 * kEchoMaxChars));
   return spec;
 }
 

@@ -17,6 +17,7 @@
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/temporal_window.h"
 #include "core/temporal/tgpt_frame.h"
+#include "core/util/echo_text.h"
 #include "core/util/path_confinement.h"
 
 namespace gdvr {
@@ -73,20 +74,25 @@ int frame_position(const std::vector<int>& frames, int frame) {
 
 Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions& options) {
   if (job.scene.empty()) return invalid_argument("job.scene: no scene given");
+  const std::string shown = echo_text(job.scene);
+  // A NUL would cut the path short in every C API below it.
+  if (job.scene.find('\0') != std::string::npos) return invalid_argument("job.scene: '" + shown + "' contains a NUL byte");
   fs::path p(job.scene);
   if (p.is_relative()) p = fs::path(!options.asset_root.empty() ? options.asset_root : options.base_dir) / p;
   if (!options.asset_root.empty() && !is_inside_root(p, options.asset_root))
-    return invalid_argument("job.scene: '" + job.scene + "' lies outside the asset root");
+    return invalid_argument("job.scene: '" + shown + "' lies outside the asset root");
+  // A file of another kind is the request's mistake (INVALID_ARGUMENT), not
+  // a feature gdvr lacks.
+  if (!is_supported_scene_file(job.scene))
+    return invalid_argument("job.scene: '" + shown + "' is not a .xml, .gltf or .glb scene");
   std::error_code ec;
-  if (!fs::exists(p, ec)) return not_found("job.scene: '" + job.scene + "' does not exist");
-  if (!is_supported_scene_file(p.string()))
-    return unimplemented("job.scene: '" + job.scene + "' is not a .xml, .gltf or .glb scene");
+  if (!fs::exists(p, ec)) return not_found("job.scene: '" + shown + "' does not exist");
   return p.string();
 }
 
 Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& options) {
   if (job.integrator != "pt" && job.integrator != "gpt" && job.integrator != "tgpt")
-    return unimplemented("job.integrator: '" + job.integrator + "' is not available (supported: pt, gpt, tgpt)");
+    return invalid_argument("job.integrator: '" + echo_text(job.integrator) + "' is not available (supported: pt, gpt, tgpt)");
   if (!(job.fps > 0) || !std::isfinite(job.fps)) return invalid_argument("job.fps must be a positive number");
   if (job.width < 0 || job.height < 0 || job.width > 16384 || job.height > 16384)
     return invalid_argument("job.width/job.height must be between 1 and 16384 (0 = the scene's)");
@@ -352,6 +358,40 @@ class ProgressTracker {
 }  // namespace
 
 Status validate_job(const JobSpec& job, const JobRunOptions& options) { return prepare_job(job, options).status(); }
+
+namespace {
+
+// "the job's width", or where in the scene the value was set and which
+// <default> parameter (overridden by the job's params or not) fed it.
+std::string origin_of(bool from_job, const char* job_field, const SettingOrigin& origin, const JobSpec& job,
+                      const char* builtin) {
+  if (from_job) return std::string("the job's ") + job_field;
+  for (const std::string& p : origin.params) {
+    if (job.params.count(p)) return "params." + echo_text(p) + " (used by the scene at " + origin.where + ")";
+  }
+  if (!origin.params.empty())
+    return "the scene's <default name=\"" + origin.params.front() + "\"> (used at " + origin.where + ")";
+  if (!origin.where.empty()) return "the scene (" + origin.where + ")";
+  return std::string("gdvr's default for a scene without ") + builtin;
+}
+
+}  // namespace
+
+Expected<ResolvedRender> resolve_job(const JobSpec& job, const JobRunOptions& options) {
+  auto prepared = prepare_job(job, options);
+  if (!prepared.ok()) return prepared.status();
+  const PreparedJob& pj = prepared.value();
+  const RenderDefaults& d = pj.scene.defaults;
+  ResolvedRender out;
+  out.width = {pj.render.width, origin_of(job.width > 0, "width", d.width_origin, job, "a film")};
+  out.height = {pj.render.height, origin_of(job.height > 0, "height", d.height_origin, job, "a film")};
+  if (job.spp > 0) out.spp = {pj.render.spp, "the job's spp"};
+  else if (job.time_budget_s > 0) out.spp = {pj.render.spp, "1-spp passes of the job's time_budget_s"};
+  else out.spp = {pj.render.spp, origin_of(false, "spp", d.spp_origin, job, "a sampler")};
+  out.time_budget_s = pj.render.time_budget_s;
+  out.frames = int(pj.frames.size());
+  return out;
+}
 
 std::vector<int> frames_needed_to_finalize(const JobSpec& job, const std::vector<int>& job_frames, int frame) {
   const int pos = frame_position(job_frames, frame);

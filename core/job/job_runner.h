@@ -68,6 +68,27 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
 // Validates a job (scene loads, frame range parses, values in range) without rendering.
 Status validate_job(const JobSpec& job, const JobRunOptions& options);
 
+// What a job will render once the scene file and the job's <default>
+// overrides (params) are resolved: the values a resource limit must apply to,
+// since a job that leaves width unset renders the scene's film width, which
+// `params: {"res": "4096"}` may have set. Each comes with where it came from
+// ("the job's width", "params.res (scene.xml:12)", "the scene (scene.xml:9)"),
+// for a refusal that names its cause.
+struct ResolvedSetting {
+  long long value = 0;
+  std::string origin;
+};
+struct ResolvedRender {
+  ResolvedSetting width, height;
+  // Samples per pixel per frame; with a time budget and no spp, the 1-spp
+  // pass size (the budget, not spp, then bounds the work).
+  ResolvedSetting spp;
+  double time_budget_s = 0;  // per frame; 0: none
+  int frames = 0;
+};
+// Loads the scene as validate_job does (same errors) and resolves the above.
+Expected<ResolvedRender> resolve_job(const JobSpec& job, const JobRunOptions& options);
+
 // ---- Staged execution ----
 // A job runs in two stages, which a render farm can run as separate commands on
 // separate machines (run_job chains them in one process, so both give the same

@@ -15,6 +15,8 @@
 #include <limits>
 #include <set>
 
+#include "core/util/echo_text.h"
+
 namespace gdvr {
 
 using nlohmann::json;
@@ -31,12 +33,20 @@ std::string trim(const std::string& s) {
   return s.substr(b, e - b);
 }
 
-// A non-negative decimal integer (digits only, no sign).
+// A non-negative decimal integer (digits only, no sign). Values above
+// INT_MAX come back as INT_MAX + 1 so that callers can say "too large"
+// rather than "not a number".
 bool parse_uint(const std::string& s, long long* out) {
-  if (s.empty() || s.size() > 9) return false;
+  if (s.empty()) return false;
   for (char c : s)
     if (!std::isdigit(static_cast<unsigned char>(c))) return false;
-  *out = std::atoll(s.c_str());
+  size_t first = s.find_first_not_of('0');
+  if (first == std::string::npos) first = s.size();
+  if (s.size() - first > 10) {
+    *out = (long long)std::numeric_limits<int>::max() + 1;
+    return true;
+  }
+  *out = std::min(std::atoll(s.c_str()), (long long)std::numeric_limits<int>::max() + 1);
   return true;
 }
 
@@ -46,8 +56,9 @@ class JsonReader {
  public:
   explicit JsonReader(std::string origin) : origin_(std::move(origin)) {}
 
+  // Paths hold the client's JSON keys, so they are echoed bounded.
   Status error(const std::string& path, const std::string& msg) const {
-    return invalid_argument(origin_ + ": " + path + ": " + msg);
+    return invalid_argument(origin_ + ": " + echo_text(path) + ": " + msg);
   }
 
   Status check_object(const json& j, const std::string& path, std::initializer_list<const char*> allowed) const {
@@ -55,7 +66,7 @@ class JsonReader {
     for (auto it = j.begin(); it != j.end(); ++it) {
       bool ok = false;
       for (const char* a : allowed) ok = ok || it.key() == a;
-      if (!ok) return error(path + "." + it.key(), "unknown field");
+      if (!ok) return error(path + "." + echo_text(it.key()), "unknown field");
     }
     return Status::Ok();
   }
@@ -216,7 +227,7 @@ Status parse_tracks(const JsonReader& r, const json& j, const std::string& path,
     if (interp == "step") track.interpolation = Interpolation::kStep;
     else if (interp == "linear" || interp.empty()) track.interpolation = Interpolation::kLinear;
     else if (interp == "cubic") track.interpolation = Interpolation::kCubic;
-    else return r.error(tp + ".interpolation", "must be step, linear or cubic, not '" + interp + "'");
+    else return r.error(tp + ".interpolation", "must be step, linear or cubic, not '" + echo_text(interp) + "'");
     if (!tj.contains("keys") || !tj["keys"].is_array() || tj["keys"].empty())
       return r.error(tp + ".keys", "must be a non-empty array");
     const json& keys = tj["keys"];
@@ -249,13 +260,19 @@ Expected<std::vector<int>> parse_frame_range(const std::string& text, size_t max
   size_t limit = max_frames ? std::min(max_frames, kHardFrameLimit) : kHardFrameLimit;
   std::string all = trim(text);
   if (all.empty()) return invalid_argument("frame range is empty");
+  const long long kMaxFrame = std::numeric_limits<int>::max();
+  // Frames named so far, counting every token in full (an upper bound when
+  // tokens overlap), so a huge range is refused before it is expanded.
+  long long named = 0;
   size_t start = 0;
   while (start <= all.size()) {
     size_t comma = all.find(',', start);
     if (comma == std::string::npos) comma = all.size();
     std::string token = trim(all.substr(start, comma - start));
     start = comma + 1;
-    auto bad = [&](const std::string& why) { return invalid_argument("frame range '" + text + "': token '" + token + "': " + why); };
+    auto bad = [&](const std::string& why) {
+      return invalid_argument("frame range '" + echo_text(text) + "': token '" + echo_text(token) + "': " + why);
+    };
     if (token.empty()) return bad("empty");
     std::string range = token, step_text;
     size_t x = token.find_first_of("xX");
@@ -275,15 +292,17 @@ Expected<std::vector<int>> parse_frame_range(const std::string& text, size_t max
       if (!parse_uint(b, &last)) return bad("range end is not a non-negative frame number");
       if (last < first) return bad("range end is before its start");
     }
+    if (first > kMaxFrame || last > kMaxFrame)
+      return bad("frame number too large (the largest is " + std::to_string(kMaxFrame) + ")");
     if (x != std::string::npos && !parse_uint(step_text, &step)) return bad("step is not a positive integer");
     if (step <= 0) return bad("step must be positive");
-    if ((last - first) / step + 1 + (long long)frames.size() > (long long)limit)
-      return resource_exhausted("frame range '" + text + "' has more than " + std::to_string(limit) + " frames");
+    named += (last - first) / step + 1;
+    if (named > (long long)limit)
+      return resource_exhausted("frame range '" + echo_text(text) + "' is too large: it names " +
+                                std::to_string(named) + " frames, over the limit of " + std::to_string(limit));
     for (long long f = first; f <= last; f += step) frames.insert(int(f));
     if (comma == all.size()) break;
   }
-  if (frames.size() > limit)
-    return resource_exhausted("frame range '" + text + "' has more than " + std::to_string(limit) + " frames");
   return std::vector<int>(frames.begin(), frames.end());
 }
 
@@ -292,7 +311,8 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   try {
     j = json::parse(json_text);
   } catch (const json::exception& e) {  // parse_error, and out_of_range for numbers like 1E99999
-    return invalid_argument(origin + ": not valid JSON: " + e.what());
+    // The parser's message quotes the last token read, which may be huge.
+    return invalid_argument(origin + ": not valid JSON: " + echo_text(e.what(), 2 * kEchoMaxChars));
   }
   JsonReader r(origin);
   const std::string p = "job";
@@ -322,14 +342,18 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   if (job.spp < 0 || job.spp > (1 << 20)) return r.error(p + ".spp", "must be in [0, 2^20] (0: the scene's)");
   if (job.time_budget_s < 0) return r.error(p + ".time_budget_s", "must be >= 0");
   if (job.integrator != "pt" && job.integrator != "gpt" && job.integrator != "tgpt")
-    return r.error(p + ".integrator", "must be pt, gpt or tgpt, not '" + job.integrator + "'");
+    return r.error(p + ".integrator", "must be pt, gpt or tgpt, not '" + echo_text(job.integrator) + "'");
   if (job.shift != "replay" && job.shift != "reconnect" && job.shift != "hybrid")
-    return r.error(p + ".shift", "must be replay, reconnect or hybrid, not '" + job.shift + "'");
+    return r.error(p + ".shift", "must be replay, reconnect or hybrid, not '" + echo_text(job.shift) + "'");
   if (job.temporal_shift != "replay" && job.temporal_shift != "reconnect")
-    return r.error(p + ".temporal_shift", "must be replay or reconnect, not '" + job.temporal_shift + "'");
+    return r.error(p + ".temporal_shift", "must be replay or reconnect, not '" + echo_text(job.temporal_shift) + "'");
   {
+    // A range over the frame limit keeps its RESOURCE_EXHAUSTED code.
     auto frames = parse_frame_range(job.frames);
-    if (!frames.ok()) return r.error(p + ".frames", frames.status().message());
+    if (!frames.ok()) {
+      Status st = r.error(p + ".frames", frames.status().message());
+      return Status(frames.status().code(), st.message());
+    }
   }
 
   if (j.contains("reconstruction")) {
@@ -350,7 +374,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
       if (rs.term_weights[0] == 0) return r.error(rp + ".term_weights[0]", "the primal's weight must be positive");
     }
     if (rs.method != "l1" && rs.method != "l2" && rs.method != "uniform" && rs.method != "weighted" && rs.method != "none")
-      return r.error(rp + ".method", "must be l1, l2, uniform, weighted or none, not '" + rs.method + "'");
+      return r.error(rp + ".method", "must be l1, l2, uniform, weighted or none, not '" + echo_text(rs.method) + "'");
     if (!(rs.alpha >= 0)) return r.error(rp + ".alpha", "must be >= 0");
     if (rs.window < 1 || rs.window > 1000) return r.error(rp + ".window", "must be in [1, 1000]");
   }
@@ -360,10 +384,14 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
     GDVR_RETURN_IF_ERROR(r.check_object(dj, dp, {"strata", "edge_strata"}));
     GDVR_RETURN_IF_ERROR(r.opt(dj, "strata", dp, &job.direct_light.strata));
     GDVR_RETURN_IF_ERROR(r.opt(dj, "edge_strata", dp, &job.direct_light.edge_strata));
-    if (job.direct_light.strata < -1 || job.direct_light.strata > 64)
-      return r.error(dp + ".strata", "must be in [0, 64] (0: from the paths' own samples)");
-    if (job.direct_light.edge_strata < -1 || job.direct_light.edge_strata > 64)
-      return r.error(dp + ".edge_strata", "must be in [0, 64]");
+    // -1 is JobSpec's "unset" (the integrator's default); a job file leaves
+    // the field out for that, so an explicit negative value is an error.
+    auto given = [&](const char* key) { return dj.contains(key) && !dj[key].is_null(); };
+    if (given("strata") && (job.direct_light.strata < 0 || job.direct_light.strata > 64))
+      return r.error(dp + ".strata", "must be in [0, 64] (0: from the paths' own samples; leave it out for the "
+                                     "integrator's default)");
+    if (given("edge_strata") && (job.direct_light.edge_strata < 0 || job.direct_light.edge_strata > 64))
+      return r.error(dp + ".edge_strata", "must be in [0, 64] (leave it out for the integrator's default)");
   }
   if (j.contains("params")) {
     const json& pj = j["params"];
@@ -403,7 +431,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
     GDVR_RETURN_IF_ERROR(r.opt(oj, "ocio_display", op, &o.ocio_display));
     GDVR_RETURN_IF_ERROR(r.opt(oj, "ocio_view", op, &o.ocio_view));
     if (o.video_codec != "h264" && o.video_codec != "prores" && o.video_codec != "ffv1" && o.video_codec != "none")
-      return r.error(op + ".video_codec", "must be h264, prores, ffv1 or none, not '" + o.video_codec + "'");
+      return r.error(op + ".video_codec", "must be h264, prores, ffv1 or none, not '" + echo_text(o.video_codec) + "'");
   }
   return job;
 }

@@ -14,6 +14,8 @@
 #include <cmath>
 #include <set>
 
+#include "core/util/echo_text.h"
+
 namespace gdvr {
 
 namespace {
@@ -222,9 +224,11 @@ Status validate_animation(const Animation& anim, const Scene& scene) {
   if (!scene.camera.id.empty()) ids.insert(scene.camera.id);
   for (size_t ti = 0; ti < anim.tracks.size(); ++ti) {
     const Track& tr = anim.tracks[ti];
-    std::string where = "tracks[" + std::to_string(ti) + "] (target '" + tr.target + "')";
+    std::string where = "tracks[" + std::to_string(ti) + "] (target '" + echo_text(tr.target) + "')";
+    // A target the scene lacks is a bad argument of the job (NOT_FOUND is
+    // kept for files and jobs that do not exist).
     if (tr.target != "sensor" && !ids.count(tr.target))
-      return Status(StatusCode::kNotFound, where + ": no shape, emitter or sensor with this id in " + scene.source);
+      return invalid_argument(where + ": no shape, emitter or sensor with this id in " + scene.source);
     if (tr.keys.empty()) return invalid_argument(where + ": no keyframes");
     for (size_t k = 0; k < tr.keys.size(); ++k) {
       if (!std::isfinite(tr.keys[k].time)) return invalid_argument(where + ": key " + std::to_string(k) + " has a non-finite time");

@@ -678,6 +678,7 @@ class SceneBuilder {
     int seed = 0;
     bool jitter = true;
     GDVR_RETURN_IF_ERROR(props.get_int("sample_count", &scene_.defaults.spp));
+    record_origin(props, "sample_count", &scene_.defaults.spp_origin);
     GDVR_RETURN_IF_ERROR(props.get_int("seed", &seed));
     GDVR_RETURN_IF_ERROR(props.get_bool("jitter", &jitter));
     if (e.from_legacy_file()) ignore_params(props, {"dimension", "scramble"}, "Mitsuba 0.x sample generation");
@@ -703,6 +704,8 @@ class SceneBuilder {
     bool sample_border = false;
     GDVR_RETURN_IF_ERROR(props.get_int("width", &scene_.defaults.width));
     GDVR_RETURN_IF_ERROR(props.get_int("height", &scene_.defaults.height));
+    record_origin(props, "width", &scene_.defaults.width_origin);
+    record_origin(props, "height", &scene_.defaults.height_origin);
     GDVR_RETURN_IF_ERROR(props.get_string("pixel_format", &pixel_format));
     GDVR_RETURN_IF_ERROR(props.get_string("file_format", &file_format));
     GDVR_RETURN_IF_ERROR(props.get_string("component_format", &component_format));
@@ -759,6 +762,14 @@ class SceneBuilder {
   // settings that change nothing in gdvr's image (mostly what Mitsuba 0.x
   // films and samplers took and Mitsuba 3 dropped). Callers pass the 0.x ones
   // only for upgraded files: in a Mitsuba 3 file they stay unknown parameters.
+  // Where parameter `name` (already read) was set, for RenderDefaults.
+  static void record_origin(MitsubaProps& props, const std::string& name, SettingOrigin* origin) {
+    const XmlElement* e = props.take(name);
+    if (!e) return;
+    origin->where = e->where();
+    origin->params = e->params_used;
+  }
+
   void ignore_params(MitsubaProps& props, std::initializer_list<const char*> names, const std::string& why) {
     std::string list;
     for (const char* n : names)

@@ -142,7 +142,7 @@ class XmlReader {
       for (pugi::xml_attribute a = c.first_attribute(); a; a = a.next_attribute()) {
         std::string value = a.value();
         // <default> values are taken literally, as Mitsuba does.
-        if (e.tag != "default") GDVR_RETURN_IF_ERROR(substitute(&value, e));
+        if (e.tag != "default") GDVR_RETURN_IF_ERROR(substitute(&value, &e));
         e.attrs.emplace_back(a.name(), value);
       }
       if (e.tag == "default") {
@@ -161,7 +161,7 @@ class XmlReader {
 
   // Replaces every $name by its parameter value. A '$' not followed by a name
   // character is kept (Mitsuba does the same).
-  Status substitute(std::string* value, const XmlElement& e) {
+  Status substitute(std::string* value, XmlElement* e) {
     if (value->find('$') == std::string::npos) return Status::Ok();
     std::string out;
     for (size_t i = 0; i < value->size();) {
@@ -181,8 +181,9 @@ class XmlReader {
       std::string name = value->substr(i + 1, j - i - 1);
       auto it = doc_->params.find(name);
       if (it == doc_->params.end())
-        return e.error("undefined parameter '$" + name + "' (no <default> and not set with a parameter override)");
+        return e->error("undefined parameter '$" + name + "' (no <default> and not set with a parameter override)");
       out += it->second;
+      e->params_used.push_back(name);
       i = j;
     }
     *value = out;

@@ -26,6 +26,9 @@ struct XmlSource {
 struct XmlElement {
   std::string tag;
   std::vector<std::pair<std::string, std::string>> attrs;  // after $name substitution
+  // The $name parameters substituted into attrs, in order: where a value came
+  // from when a limit refuses it (e.g. a film width of "$res").
+  std::vector<std::string> params_used;
   std::vector<XmlElement> children;
   const XmlSource* source = nullptr;
   int line = 0;

@@ -47,9 +47,17 @@ struct Camera {
   float near_clip = 0.01f, far_clip = 10000.0f;
 };
 
+// Where a render default was set, so that a refusal (the server's resource
+// limits) can say why a value is what it is rather than only what it is.
+struct SettingOrigin {
+  std::string where;                // "scene.xml:12"; empty: gdvr's built-in default
+  std::vector<std::string> params;  // <default> parameters substituted into it ("res")
+};
+
 struct RenderDefaults {
   int width = 768, height = 576;  // hdrfilm
   int spp = 4;                    // sampler sample_count
+  SettingOrigin width_origin, height_origin, spp_origin;
   int max_depth = -1;             // Mitsuba path: 1 = emitters seen directly, -1 unbounded
   int rr_depth = 5;               // Russian roulette from this depth on
   bool hide_emitters = false;

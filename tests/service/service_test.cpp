@@ -268,6 +268,8 @@ TEST_F(ServiceTest, CancelStopsRunningJob) {
   req.set_job_id(resp.job_id());
   v1::Job job;
   ASSERT_TRUE(stub->CancelJob(&ctx, req, &job).ok());
+  // The answer is the state the job is moving to, not a stale RUNNING.
+  EXPECT_EQ(job.state(), v1::JOB_STATE_CANCELLING);
   Watched rest = watch(stub.get(), resp.job_id());
   EXPECT_EQ(rest.terminal, "cancelled");
   EXPECT_LT(rest.order.size(), 8u);

@@ -45,6 +45,7 @@ class Frame:
 _STATES = {
     "queued": pb.JOB_STATE_QUEUED, "running": pb.JOB_STATE_RUNNING, "completed": pb.JOB_STATE_COMPLETED,
     "failed": pb.JOB_STATE_FAILED, "cancelled": pb.JOB_STATE_CANCELLED,
+    "cancelling": pb.JOB_STATE_CANCELLING,
 }
 
 

@@ -43,6 +43,32 @@ TEST(FrameRangeTest, TooManyFrames) {
   EXPECT_EQ(r.status().code(), StatusCode::kResourceExhausted);
   EXPECT_FALSE(parse_frame_range("0-999999999").ok());
   EXPECT_TRUE(parse_frame_range("1-100", 100).ok());
+  // The largest int frame number is a range too large, not "not a number"
+  // (it was, with 10 digits); a frame above it is named as too large.
+  r = parse_frame_range("0-2147483647", 100);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kResourceExhausted);
+  EXPECT_NE(r.status().message().find("too large"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("2147483648 frames"), std::string::npos) << r.status().message();
+  r = parse_frame_range("2147483648");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(r.status().message().find("too large"), std::string::npos) << r.status().message();
+  EXPECT_EQ(frames("2147483647"), (std::vector<int>{2147483647}));
+  // Through the job file the code survives, so the server answers RESOURCE_EXHAUSTED.
+  auto job = parse_job_json(R"({"scene": "a.xml", "frames": "0-2147483647"})", "j.json");
+  ASSERT_FALSE(job.ok());
+  EXPECT_EQ(job.status().code(), StatusCode::kResourceExhausted);
+  EXPECT_NE(job.status().message().find("job.frames"), std::string::npos) << job.status().message();
+}
+
+TEST(FrameRangeTest, HugeInputIsEchoedBounded) {
+  std::string huge(20000, '7');
+  huge += "x";
+  auto r = parse_frame_range(huge);
+  ASSERT_FALSE(r.ok());
+  EXPECT_LT(r.status().message().size(), 1000u) << r.status().message().substr(0, 2000);
+  EXPECT_NE(r.status().message().find("(20001 characters)"), std::string::npos);
 }
 
 TEST(JobSpecTest, ParsesEveryField) {
@@ -143,6 +169,9 @@ TEST(JobSpecTest, TypeAndValueErrorsNameTheField) {
       {R"({"scene": "a.xml", "reconstruction": {"term_weights": [1, 1, 1, -1, 1, 1]}})", "job.reconstruction.term_weights[3]"},
       {R"({"scene": "a.xml", "reconstruction": {"term_weights": [0, 1, 1, 1, 1, 1]}})", "job.reconstruction.term_weights[0]"},
       {R"({"scene": "a.xml", "direct_light": {"edge_strata": -2}})", "job.direct_light.edge_strata"},
+      // -1 is JobSpec's internal "unset"; written out it is as wrong as -2.
+      {R"({"scene": "a.xml", "direct_light": {"strata": -1}})", "job.direct_light.strata"},
+      {R"({"scene": "a.xml", "direct_light": {"edge_strata": -1}})", "job.direct_light.edge_strata"},
       {R"({"scene": "a.xml", "tracks": [{"target": "s", "interpolation": "spline", "keys": [{"time": 0, "translate": [0,0,0]}]}]})",
        "job.tracks[0].interpolation"},
       {R"({"scene": "a.xml", "tracks": [{"target": "s", "keys": [{"time": 1, "translate": [0,0,0]}, {"time": 0, "translate": [0,0,0]}]}]})",

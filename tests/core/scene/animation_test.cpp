@@ -112,7 +112,7 @@ TEST(AnimationTest, ValidateAndApply) {
 
   Animation bad = anim;
   bad.tracks[1].target = "nothing";
-  EXPECT_EQ(validate_animation(bad, scene).code(), StatusCode::kNotFound);
+  EXPECT_EQ(validate_animation(bad, scene).code(), StatusCode::kInvalidArgument);  // a bad job, not a missing file
   bad = anim;
   bad.tracks[0].keys[1].time = 0;
   EXPECT_EQ(validate_animation(bad, scene).code(), StatusCode::kInvalidArgument);
