@@ -1,7 +1,6 @@
 // gdvr: command-line client of gdvr-server.
 //   gdvr [global flags] submit|watch|status|list|cancel|fetch|upload ...
 #include <google/protobuf/util/json_util.h>
-#include <grpcpp/generic/generic_stub.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -18,7 +17,9 @@
 
 #include "client/connection.h"
 #include "client/frame_sink.h"
+#include "client/health_check.h"
 #include "client/progress_view.h"
+#include "proto/job_state_name.h"
 
 namespace fs = std::filesystem;
 using namespace gdvr;
@@ -98,18 +99,6 @@ std::string random_key() {
   char buf[40];
   std::snprintf(buf, sizeof buf, "cli-%08x%08x%08x", rd(), rd(), rd());
   return buf;
-}
-
-const char* state_name(v1::JobState s) {
-  switch (s) {
-    case v1::JOB_STATE_QUEUED: return "queued";
-    case v1::JOB_STATE_RUNNING: return "running";
-    case v1::JOB_STATE_COMPLETED: return "completed";
-    case v1::JOB_STATE_FAILED: return "failed";
-    case v1::JOB_STATE_CANCELLED: return "cancelled";
-    case v1::JOB_STATE_CANCELLING: return "cancelling";
-    default: return "unknown";
-  }
 }
 
 // ---- Progress display ----
@@ -441,7 +430,7 @@ int cmd_watch(Connection& conn, const Args& a) {
 void print_job(const v1::Job& j) {
   int rendered = std::max(j.progress().frames_rendered(), j.final_frames_size());
   std::printf("%s  %-10s  final %d/%d  rendered %d/%d  priority %d  scene %s%s%s\n", j.id().c_str(),
-              state_name(j.state()), j.final_frames_size(), j.frames_size(), rendered, j.frames_size(), j.priority(),
+              job_state_name(j.state()).c_str(), j.final_frames_size(), j.frames_size(), rendered, j.frames_size(), j.priority(),
               j.spec().scene().c_str(), j.reason().empty() ? "" : "  reason: ", j.reason().c_str());
 }
 
@@ -490,7 +479,7 @@ int cmd_cancel(Connection& conn, const Args& a) {
   auto ctx = conn.context();
   grpc::Status st = conn.stub()->CancelJob(ctx.get(), req, &job);
   if (!st.ok()) return report_rpc_error("cancel " + a.positional[0], st, conn.options());
-  std::fprintf(stderr, "gdvr: %s is %s\n", job.id().c_str(), state_name(job.state()));
+  std::fprintf(stderr, "gdvr: %s is %s\n", job.id().c_str(), job_state_name(job.state()).c_str());
   return kExitOk;
 }
 
@@ -512,11 +501,9 @@ int cmd_fetch(Connection& conn, const Args& a) {
   return fetch_artifacts(conn, a.positional[0], kinds, a.get("out"));
 }
 
-// grpc.health.v1.Health/Check for the whole server (service ""), through a
-// generic call so the CLI needs no health stubs: the request is empty and the
-// response's field 1 is the status (1 SERVING, 2 NOT_SERVING).
+// grpc.health.v1.Health/Check over the CLI's channel settings (TLS CA only:
+// health needs no token).
 std::string health_check(const ConnectionOptions& opts, std::string* error) {
-  grpc::ChannelArguments args;
   std::shared_ptr<grpc::ChannelCredentials> creds = grpc::InsecureChannelCredentials();
   if (!opts.tls_ca.empty()) {
     grpc::SslCredentialsOptions ssl;
@@ -526,32 +513,9 @@ std::string health_check(const ConnectionOptions& opts, std::string* error) {
     ssl.pem_root_certs = ss.str();
     creds = grpc::SslCredentials(ssl);
   }
-  auto channel = grpc::CreateCustomChannel(opts.server, creds, args);
-  grpc::GenericStub stub(channel);
-  grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(3));
-  grpc::Slice empty("");
-  grpc::ByteBuffer req(&empty, 1), resp;
-  grpc::CompletionQueue cq;
-  auto call = stub.PrepareUnaryCall(&ctx, "/grpc.health.v1.Health/Check", req, &cq);
-  call->StartCall();
-  grpc::Status st;
-  call->Finish(&resp, &st, reinterpret_cast<void*>(1));
-  void* tag;
-  bool ok;
-  cq.Next(&tag, &ok);
-  cq.Shutdown();
-  while (cq.Next(&tag, &ok)) {}
-  if (!st.ok()) {
-    *error = st.error_message();
-    return "UNREACHABLE";
-  }
-  std::vector<grpc::Slice> slices;
-  (void)resp.Dump(&slices);
-  std::string bytes;
-  for (auto& sl : slices) bytes.append(reinterpret_cast<const char*>(sl.begin()), sl.size());
-  int v = bytes.size() >= 2 && bytes[0] == 0x08 ? bytes[1] : 0;
-  return v == 1 ? "SERVING" : v == 2 ? "NOT_SERVING" : "UNKNOWN";
+  auto channel = grpc::CreateCustomChannel(opts.server, creds, grpc::ChannelArguments());
+  const std::string status = check_health(channel, std::chrono::seconds(3), error);
+  return status.empty() ? "UNREACHABLE" : status;
 }
 
 int cmd_health(const ConnectionOptions& opts, const Args& a) {

@@ -33,8 +33,8 @@ ASSET_ROOT=scenes
 if [ "${GDVR_DEMO_SKIP_BUILD:-0}" != 1 ]; then
   bash deploy/build.sh
 fi
-SERVER_BIN=$BUILD_DIR/server/gdvr-server
-CLI=$BUILD_DIR/client/gdvr
+SERVER_BIN=$BUILD_DIR/bin/gdvr-server
+CLI=$BUILD_DIR/bin/gdvr
 for b in "$SERVER_BIN" "$CLI"; do
   [ -x "$b" ] || { echo "demo: $b is missing; run deploy/build.sh" >&2; exit 1; }
 done
@@ -101,7 +101,7 @@ REPORT=""
 if [ "${GDVR_DEMO_REPORT:-1}" != 0 ]; then
   REPORT_ARGS=(--out "$OUT/report" --frames 0-23 --width 64 --height 64 --budgets 0.1,0.3 --reference-spp 512)
   [ -n "${GDVR_DEMO_THREADS:-}" ] && REPORT_ARGS+=(--threads "$GDVR_DEMO_THREADS")
-  if "$BUILD_DIR/core/gdvr-report" "$JOB" "${REPORT_ARGS[@]}"; then
+  if "$BUILD_DIR/bin/gdvr-report" "$JOB" "${REPORT_ARGS[@]}"; then
     REPORT=$(cd "$OUT/report" && pwd)/report.html
   else
     echo "demo: gdvr-report failed (the rendered frames in $OUT are complete)" >&2

@@ -13,9 +13,10 @@
 #include "core/io/atomic_file.h"
 #include "core/io/image_io.h"
 #include "core/job/job_outputs.h"
-#include "core/report/error_metrics.h"
+#include "core/image/error_metrics.h"
 #include "core/util/echo_text.h"
 #include "core/util/path_confinement.h"
+#include "proto/job_state_name.h"
 #include "server/log.h"
 #include "server/scene_location.h"
 #include "server/status_map.h"
@@ -55,18 +56,6 @@ std::string new_job_id() {
 
 bool is_terminal(v1::JobState s) {
   return s == v1::JOB_STATE_COMPLETED || s == v1::JOB_STATE_FAILED || s == v1::JOB_STATE_CANCELLED;
-}
-
-const char* state_name(v1::JobState s) {
-  switch (s) {
-    case v1::JOB_STATE_QUEUED: return "queued";
-    case v1::JOB_STATE_RUNNING: return "running";
-    case v1::JOB_STATE_COMPLETED: return "completed";
-    case v1::JOB_STATE_FAILED: return "failed";
-    case v1::JOB_STATE_CANCELLED: return "cancelled";
-    case v1::JOB_STATE_CANCELLING: return "cancelling";
-    default: return "unspecified";
-  }
 }
 
 bool read_file(const std::string& path, std::string* out) {
@@ -410,7 +399,7 @@ Expected<v1::Job> JobManager::cancel(const std::string& id) {
   if (it == jobs_.end()) return not_found("job_id: no job '" + echo_text(id) + "'");
   Job* j = it->second.get();
   if (is_terminal(j->state))
-    return failed_precondition("job '" + id + "' is already " + state_name(j->state));
+    return failed_precondition("job '" + id + "' is already " + job_state_name(j->state));
   if (j->state == v1::JOB_STATE_QUEUED) {
     finish_locked(j, v1::JOB_STATE_CANCELLED, "cancelled by a client before it started", "CANCELLED");
   } else if (j->state == v1::JOB_STATE_RUNNING) {
@@ -588,7 +577,7 @@ void JobManager::finish_locked(Job* job, v1::JobState state, const std::string& 
   if (!st.ok()) log_event("error", "persist_failed", {{"job", job->id}, {"error", st.message()}});
   write_stats_json(*job);
   log_event(state == v1::JOB_STATE_FAILED ? "warn" : "info", "job_finished",
-            {{"job", job->id}, {"state", state_name(state)}, {"reason", reason},
+            {{"job", job->id}, {"state", job_state_name(state)}, {"reason", reason},
              {"final_frames", std::to_string(job->final_frames.size())}});
 }
 
@@ -602,7 +591,7 @@ void JobManager::write_stats_json(const Job& job) const {
   std::vector<WrittenFrame> frames;
   for (const auto& [f, rec] : job.final_frames) frames.push_back({rec.file, rec.size, from_proto(rec.stats)});
   std::vector<std::pair<std::string, std::string>> header = {
-      {"job_id", job.id}, {"integrator", job.core.integrator}, {"state", state_name(job.state)}};
+      {"job_id", job.id}, {"integrator", job.core.integrator}, {"state", job_state_name(job.state)}};
   if (!job.reason.empty()) header.push_back({"reason", job.reason});
   (void)write_text_atomic(job_dir(job.id) + "/stats.json", stats_json(header, int(job.frames.size()), frames));
 }

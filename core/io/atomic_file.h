@@ -24,4 +24,12 @@ Status write_text_atomic(const std::string& path, const std::string& text);
 // Best-effort removal of a temporary left by a failed write.
 void discard_temporary(const std::string& tmp);
 
+// Removes the temporaries in `dir` whose writer was a process of this host
+// that no longer runs (a worker killed mid-write). Temporaries of other hosts
+// are left alone: on shared storage their writers may still be running.
+void remove_temporaries_of_dead_writers(const std::string& dir);
+
+// Reads a whole file; NOT_FOUND naming it when it cannot be read.
+Expected<std::string> read_text_file(const std::string& path);
+
 }  // namespace gdvr

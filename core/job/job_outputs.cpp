@@ -13,7 +13,7 @@
 #include "core/io/atomic_file.h"
 #include "core/io/image_io.h"
 #include "core/io/shipped_ocio_config.h"
-#include "core/report/error_metrics.h"
+#include "core/image/error_metrics.h"
 #include "core/util/path_confinement.h"
 
 namespace gdvr {

@@ -91,7 +91,7 @@ class JobOutputs {
   // the layers job.outputs.exr_layers selects, all when it is empty; a selected
   // layer this integrator does not produce is named in left_out), computes the
   // display image, writes the preview and, when the job has a reference,
-  // fills the record's relMSE with both forms of core/report/error_metrics.h
+  // fills the record's relMSE with both forms of core/image/error_metrics.h
   // (the figures gdvr-report uses); the record's left_out says why they are
   // missing. The display image is kept for add_to_video().
   Expected<WrittenFrame> write_frame(const FrameOutput& frame);

@@ -16,7 +16,7 @@
 #include "core/io/color_transform.h"
 #include "core/io/image_io.h"
 #include "core/recon/predicted_improvement.h"
-#include "core/report/error_metrics.h"
+#include "core/image/error_metrics.h"
 #include "core/report/plot.h"
 
 namespace gdvr {

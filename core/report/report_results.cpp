@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "core/io/atomic_file.h"
-#include "core/report/error_metrics.h"
+#include "core/image/error_metrics.h"
 
 namespace gdvr {
 namespace {

@@ -12,7 +12,7 @@ stage=${2:?usage: stage-runtime.sh BUILD_DIR STAGE_DIR}
 src=$(cd "$(dirname "$0")/../.." && pwd)
 
 mkdir -p "$stage/usr/local/bin" "$stage/usr/local/share/gdvr"
-bins=("$build/server/gdvr-server" "$build/client/gdvr" "$build/core/gdvr-farm" "$build/core/gdvr-render")
+bins=("$build/bin/gdvr-server" "$build/bin/gdvr" "$build/bin/gdvr-farm" "$build/bin/gdvr-render")
 for b in "${bins[@]}"; do
   [ -x "$b" ] || { echo "stage-runtime: $b was not built" >&2; exit 1; }
   install -m 0755 -s "$b" "$stage/usr/local/bin/" 2>/dev/null || install -m 0755 "$b" "$stage/usr/local/bin/"

@@ -31,9 +31,9 @@ build folder). No Mitsuba and no PyPI is a failure, not a skip. Prints one line 
 worst cases with their seeds; writes a JSON report with --report. Exit code 1
 if any scene failed.
 
-  python3 tests/differential/differential_test.py --render build/core/gdvr-render --seeds 0-499 \\
+  python3 tests/differential/differential_test.py --render build/bin/gdvr-render --seeds 0-499 \\
       --integrators 5 --venv build/mitsuba-venv --report differential.json
-  python3 tests/differential/differential_test.py --render build/core/gdvr-render --seeds 17 --keep /tmp/s17
+  python3 tests/differential/differential_test.py --render build/bin/gdvr-render --seeds 17 --keep /tmp/s17
 """
 import argparse
 import json

@@ -108,8 +108,8 @@ def localhost(args):
                 print(err)
         check(frame_files(buffers, "buffers_") == [f"buffers_{f:04d}.{e}" for f in range(6) for e in ("exr", "json")],
               f"{integrator}: one buffers EXR + marker per frame, nothing else visible")
-        check(not [p for p in buffers.iterdir() if p.name.startswith(".")],
-              f"{integrator}: no staging files left behind")
+        check(not [p for p in buffers.iterdir() if ".tmp." in p.name],
+              f"{integrator}: no temporaries left behind")
         check(run([farm, "status", job, "--buffers", buffers]).returncode == 0,
               f"{integrator}: status exits 0 once every chunk is done")
 
@@ -206,14 +206,15 @@ def kill(args):
     status = run([farm, "status", job, "--buffers", buffers])
     check(status.returncode == 3 and "missing: 1-2" in status.stdout, "status reports frames 1-2 missing")
     frame0 = snapshot(buffers)["buffers_0000.exr"]
-    # A kill during a write leaves a hidden staging file; the timing above
-    # rarely hits one, so plant what it would leave: this host's dead pid
-    # (swept by the rerun) and another host's (left alone: it may be alive).
+    # A kill during a write leaves a temporary "<file>.tmp.<host>.<pid>"; the
+    # timing above rarely hits one, so plant what it would leave: this host's
+    # dead pid (swept by the rerun) and another host's (left alone: it may be
+    # alive).
     dead = subprocess.Popen(["true"])
     dead.wait()
     host = socket.gethostname().replace(".", "_").replace("/", "_")
-    ours = buffers / f".buffers_0001.exr.{host}.{dead.pid}.staging.tmp.{dead.pid}"
-    theirs = buffers / f".buffers_0001.exr.other-host.{dead.pid}.staging"
+    ours = buffers / f"buffers_0001.exr.tmp.{host}.{dead.pid}"
+    theirs = buffers / f"buffers_0001.exr.tmp.other-host.{dead.pid}"
     ours.write_bytes(b"half an EXR")
     theirs.write_bytes(b"half an EXR")
 
@@ -221,8 +222,8 @@ def kill(args):
     check(rerun.returncode == 0 and "frame 0: buffers already complete, skipped" in rerun.stderr
           and "2 of 3 frame(s)" in rerun.stderr, "the rerun renders only frames 1-2")
     check(snapshot(buffers)["buffers_0000.exr"] == frame0, "the rerun leaves frame 0 untouched")
-    check(not ours.exists() and not [p for p in buffers.iterdir() if p.name.startswith(".") and p != theirs],
-          "the rerun removed the killed worker's staging files")
+    check(not ours.exists() and not [p for p in buffers.iterdir() if ".tmp." in p.name and p != theirs],
+          "the rerun removed the killed worker's temporaries")
     check(theirs.exists(), "the rerun left another host's staging file alone")
     theirs.unlink()
 

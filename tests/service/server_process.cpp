@@ -11,7 +11,7 @@
 #include <fstream>
 #include <thread>
 
-#include <grpcpp/generic/generic_stub.h>
+#include "client/health_check.h"
 
 namespace gdvr::testing {
 namespace fs = std::filesystem;
@@ -103,30 +103,9 @@ std::shared_ptr<grpc::Channel> ServerProcess::channel() const {
 }
 
 std::string health_status(const std::shared_ptr<grpc::Channel>& channel) {
-  // grpc.health.v1.HealthCheckRequest{service=""} is an empty message; the
-  // response's field 1 is the enum. A generic call avoids linking health protos.
-  grpc::GenericStub stub(channel);
-  grpc::ClientContext ctx;
-  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
-  grpc::ByteBuffer req, resp;
-  grpc::Slice empty("");
-  req = grpc::ByteBuffer(&empty, 1);
-  grpc::CompletionQueue cq;
-  auto call = stub.PrepareUnaryCall(&ctx, "/grpc.health.v1.Health/Check", req, &cq);
-  call->StartCall();
-  grpc::Status st;
-  call->Finish(&resp, &st, reinterpret_cast<void*>(1));
-  void* tag;
-  bool ok;
-  cq.Next(&tag, &ok);
-  if (!st.ok()) return "ERROR:" + st.error_message();
-  std::vector<grpc::Slice> slices;
-  (void)resp.Dump(&slices);
-  std::string bytes;
-  for (auto& s : slices) bytes.append(reinterpret_cast<const char*>(s.begin()), s.size());
-  // Field 1, varint: 0x08 <value>. 1 = SERVING, 2 = NOT_SERVING.
-  int v = bytes.size() >= 2 && bytes[0] == 0x08 ? bytes[1] : 0;
-  return v == 1 ? "SERVING" : v == 2 ? "NOT_SERVING" : "UNKNOWN";
+  std::string error;
+  const std::string status = client::check_health(channel, std::chrono::seconds(5), &error);
+  return status.empty() ? "ERROR:" + error : status;
 }
 
 }  // namespace gdvr::testing

@@ -34,7 +34,7 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--scenes", default="cbox,veach-mis,matpreview")
-    ap.add_argument("--gdvr", default=os.path.join(ROOT, "build/core/gdvr-render"))
+    ap.add_argument("--gdvr", default=os.path.join(ROOT, "build/bin/gdvr-render"))
     ap.add_argument("--json", default="")
     args = ap.parse_args()
 

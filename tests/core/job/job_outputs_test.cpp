@@ -64,10 +64,11 @@ TEST(JobOutputsTest, KnownLayersNameEveryLayerTheIntegratorsWrite) {
     ASSERT_EQ(frames.size(), 3u) << integrator;
     for (const FrameOutput& f : frames) {
       ASSERT_NE(f.image.find(""), nullptr) << integrator;
-      for (const ImageLayer& l : f.image.layers)
-        if (!l.name.empty())
-          EXPECT_NE(std::find(known.begin(), known.end(), l.name), known.end())
-              << integrator << " writes layer '" << l.name << "' that known_exr_layers() lacks";
+      for (const ImageLayer& l : f.image.layers) {
+        if (l.name.empty()) continue;
+        EXPECT_NE(std::find(known.begin(), known.end(), l.name), known.end())
+            << integrator << " writes layer '" << l.name << "' that known_exr_layers() lacks";
+      }
     }
   }
 }

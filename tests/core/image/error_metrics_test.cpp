@@ -1,5 +1,5 @@
 // relMSE (both forms), flicker and log-log interpolation on known arrays.
-#include "core/report/error_metrics.h"
+#include "core/image/error_metrics.h"
 
 #include <gtest/gtest.h>
 

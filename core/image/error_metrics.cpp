@@ -1,4 +1,4 @@
-#include "core/report/error_metrics.h"
+#include "core/image/error_metrics.h"
 
 #include <algorithm>
 #include <cmath>

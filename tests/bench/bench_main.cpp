@@ -35,7 +35,7 @@
 #include "core/render/pt_integrator.h"
 #include "core/render/tile_scheduler.h"
 #include "core/scene/mitsuba_loader.h"
-#include "core/tools/cli_args.h"
+#include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {

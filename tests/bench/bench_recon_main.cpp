@@ -22,7 +22,7 @@
 
 #include "core/recon/reconstruct.h"
 #include "core/recon/sliding_window.h"
-#include "core/tools/cli_args.h"
+#include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {

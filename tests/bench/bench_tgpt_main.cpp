@@ -35,7 +35,7 @@
 #include "core/temporal/stream_schedule.h"
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/temporal_window.h"
-#include "core/tools/cli_args.h"
+#include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {

@@ -9,7 +9,6 @@
 // Ctrl-C cancels (the results so far stay in DIR).
 #include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -19,24 +18,21 @@
 #include "core/io/color_transform.h"
 #include "core/io/shipped_ocio_config.h"
 #include "core/report/error_time_report.h"
-#include "core/tools/cli_args.h"
+#include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-std::atomic<bool> g_cancel{false};
-void on_signal(int) { g_cancel = true; }
+std::atomic<bool>& g_cancel = gdvr::tools::interrupted();
 
 int usage(const char* msg) {
-  if (msg) std::fprintf(stderr, "gdvr-report: %s\n", msg);
-  std::fprintf(stderr,
-               "usage: gdvr-report JOB.json|SCENE.xml --out DIR [--reference REF.exr|ref_%%04d.exr]\n"
-               "       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]\n"
-               "       [--threads N] [--width W] [--height H] [--seed N] [--param NAME=VALUE ...]\n"
-               "methods: pt gpt-l1 gpt-l2 gpt-weighted tgpt-l1 tgpt-l2 (default: all that apply)\n");
-  return 2;
+  return gdvr::tools::print_usage("gdvr-report", msg,
+      "usage: gdvr-report JOB.json|SCENE.xml --out DIR [--reference REF.exr|ref_%04d.exr]\n"
+      "       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]\n"
+      "       [--threads N] [--width W] [--height H] [--seed N] [--param NAME=VALUE ...]\n"
+      "methods: pt gpt-l1 gpt-l2 gpt-weighted tgpt-l1 tgpt-l2 (default: all that apply)\n");
 }
 
 using gdvr::tools::parse_int;
@@ -129,8 +125,7 @@ int main(int argc, char** argv) {
   o.input_name = input;
   o.ocio_config = resolve_ocio_config_path(find_shipped_ocio_config());
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  gdvr::tools::install_interrupt_handlers();
   auto log = [](const std::string& line) { std::fprintf(stderr, "gdvr-report: %s\n", line.c_str()); };
   auto report = run_error_time_report(o, log, &g_cancel);
   if (!report.ok()) {

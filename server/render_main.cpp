@@ -8,7 +8,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdlib>
 #include <cstdio>
 #include <filesystem>
@@ -24,24 +23,21 @@
 #include "core/recon/recon_settings.h"
 #include "core/temporal/tgpt_settings.h"
 #include "core/job/job_spec.h"
-#include "core/tools/cli_args.h"
+#include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {
 
-std::atomic<bool> g_cancel{false};
-void on_signal(int) { g_cancel = true; }
+std::atomic<bool>& g_cancel = gdvr::tools::interrupted();
 
 int usage(const char* msg) {
-  if (msg) std::fprintf(stderr, "gdvr-render: %s\n", msg);
-  std::fprintf(stderr,
-               "usage: gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]\n"
-               "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
-               "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
-               "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--keep-negative]\n"
-               "       [--param NAME=VALUE ...]\n"
-               "Flags override the job file; values are checked with the job (errors name the field).\n");
-  return 2;
+  return gdvr::tools::print_usage("gdvr-render", msg,
+      "usage: gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]\n"
+      "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
+      "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
+      "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--keep-negative]\n"
+      "       [--param NAME=VALUE ...]\n"
+      "Flags override the job file; values are checked with the job (errors name the field).\n");
 }
 
 using gdvr::tools::parse_int;
@@ -146,8 +142,7 @@ int main(int argc, char** argv) {
   fs::create_directories(out_dir, ec);
   if (ec) { std::fprintf(stderr, "gdvr-render: cannot create %s: %s\n", out_dir.c_str(), ec.message().c_str()); return 1; }
 
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  gdvr::tools::install_interrupt_handlers();
 
   // The job's output stage (core/job/job_outputs.h): the same files the
   // server and gdvr-farm finalize write for this job.

@@ -26,7 +26,7 @@
 #include <thread>
 #include <vector>
 
-#include "core/tools/cli_args.h"
+#include "core/util/cli_args.h"
 #include "gdvr/v1/render_service.grpc.pb.h"
 
 namespace fs = std::filesystem;

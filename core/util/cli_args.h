@@ -4,13 +4,37 @@
 // uncaught exception or a silent 0 (as std::stoi and std::atoi would give).
 #pragma once
 
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <string>
 
 namespace gdvr::tools {
+
+// Set by SIGINT/SIGTERM once install_interrupt_handlers() has run. The tools
+// pass it as their job's cancel flag, so Ctrl-C or a farm's pre-emption stops
+// the work within one tile and keeps every finished frame.
+inline std::atomic<bool>& interrupted() {
+  static std::atomic<bool> flag{false};
+  return flag;
+}
+inline void install_interrupt_handlers() {
+  interrupted();  // initialised here, not first inside the handler
+  auto on_signal = [](int) { interrupted() = true; };
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+}
+
+// "<tool>: <msg>" (when there is one) and the usage text on stderr; returns
+// the usage exit code, 2.
+inline int print_usage(const char* tool, const char* msg, const char* usage_text) {
+  if (msg) std::fprintf(stderr, "%s: %s\n", tool, msg);
+  std::fputs(usage_text, stderr);
+  return 2;
+}
 
 // Whole string `s` as an integer in [lo, hi]; false on anything else
 // (trailing characters, overflow, out of range).

@@ -27,7 +27,7 @@
 #include "core/recon/predicted_improvement.h"
 #include "core/recon/reconstruct.h"
 #include "core/scene/mitsuba_loader.h"
-#include "core/tools/cli_args.h"
+#include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
 
 namespace {
