@@ -37,6 +37,8 @@ struct PreparedJob {
   GptSettings gpt_settings;
   bool tgpt = false;
   TgptSettings tgpt_settings;
+  // What the loader approximated or ignored, said with every frame's left_out.
+  std::vector<std::string> scene_notes;
 };
 
 // The job's per-term weights (primal, dx, dy, dt, dxdt, dydt), when given.
@@ -110,6 +112,15 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
 
   PreparedJob prepared;
   prepared.scene = std::move(loaded->scene);
+  // A pixel filter replaced by box, 0.x settings without effect, repaired
+  // meshes: a user comparing with Mitsuba needs to know. Paths are shown
+  // relative to the scene's folder, so a service client never sees the
+  // server's directories.
+  const std::string scene_folder = fs::path(path.value()).parent_path().string() + "/";
+  for (std::string w : prepared.scene.warnings) {
+    for (size_t at; (at = w.find(scene_folder)) != std::string::npos;) w.erase(at, scene_folder.size());
+    prepared.scene_notes.push_back("scene: " + w);
+  }
   // Tracks in the job file come after (and override) animation stored in the scene file.
   prepared.animation = std::move(loaded->animation);
   for (const Track& t : job.animation.tracks) prepared.animation.tracks.push_back(t);
@@ -235,6 +246,7 @@ class JobRenderer {
     st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;
     st.rays_per_second = st.render_seconds > 0 ? double(st.rays) / st.render_seconds : 0;
     if (!scene_->has_environment()) st.left_out.push_back("environment lookups: the scene has no environment");
+    st.left_out.insert(st.left_out.end(), pj_.scene_notes.begin(), pj_.scene_notes.end());
     return out;
   }
 

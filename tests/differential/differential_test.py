@@ -34,6 +34,7 @@ if any scene failed.
   python3 tests/differential/differential_test.py --render build/bin/gdvr-render --seeds 0-499 \\
       --integrators 5 --venv build/mitsuba-venv --report differential.json
   python3 tests/differential/differential_test.py --render build/bin/gdvr-render --seeds 17 --keep /tmp/s17
+  python3 tests/differential/differential_test.py --render build/bin/gdvr-render --scene my/scene.xml --runs 8
 """
 import argparse
 import json
@@ -154,6 +155,9 @@ def main():
     ap.add_argument("--venv", help="where to make a venv with Mitsuba 3 if this interpreter lacks it")
     ap.add_argument("--render", required=True, help="the gdvr-render executable")
     ap.add_argument("--seeds", default="0-9")
+    ap.add_argument("--scene", action="append", default=[],
+                    help="compare this scene file instead of generated ones (repeatable; its own folder, "
+                         "its <default> values; use the same pixel filter in both renderers: gdvr's is box)")
     ap.add_argument("--spp", type=int, default=16)
     ap.add_argument("--runs", type=int, default=16)
     ap.add_argument("--size", type=int, default=48)
@@ -183,15 +187,20 @@ def main():
     work = args.keep or tempfile.mkdtemp(prefix="gdvr-differential-")
     results, failures = [], []
     start = time.time()
-    for seed in parse_seeds(args.seeds):
+    cases = list(enumerate(args.scene)) if args.scene else [(seed, None) for seed in parse_seeds(args.seeds)]
+    for seed, given in cases:
         if args.time_limit and time.time() - start > args.time_limit:
             print("time limit reached; stopping before seed %d" % seed)
             break
         folder = os.path.join(work, "seed%05d" % seed)
         shutil.rmtree(folder, ignore_errors=True)
         t0 = time.time()
-        desc = scene_generator.generate(seed, folder, args.size, args.size)
-        xml = os.path.join(folder, "scene.xml")
+        if given:
+            os.makedirs(folder)
+            desc, xml = given, os.path.abspath(given)
+        else:
+            desc = scene_generator.generate(seed, folder, args.size, args.size)
+            xml = os.path.join(folder, "scene.xml")
         entry = {"seed": seed, "scene": desc}
         try:
             scene = mi.load_file(xml)

@@ -100,6 +100,32 @@ TEST(JobRunnerTest, AnimatedInstanceMatchesBakedTransform) {
   EXPECT_GT(moved / total, 0.05);
 }
 
+// What the loader replaced (here the scene's tent filter: gdvr renders box
+// pixels) reaches every frame's left_out, without the server's directories.
+TEST(JobRunnerTest, SceneApproximationsAreReportedWithEveryFrame) {
+  JobSpec job;
+  job.scene = "scene.xml";
+  job.frames = "0-1";
+  job.width = 16;
+  job.height = 9;
+  job.spp = 1;
+  JobRunOptions options;
+  options.base_dir = std::string(GDVR_SOURCE_DIR) + "/scenes/veach-mis";
+  std::vector<std::vector<std::string>> left_out;
+  JobCallbacks cb;
+  cb.on_frame_final = [&](const FrameOutput& out) { left_out.push_back(out.stats.left_out); };
+  ASSERT_TRUE(run_job(job, options, cb, nullptr).ok());
+  ASSERT_EQ(left_out.size(), 2u);
+  for (const auto& notes : left_out) {
+    bool filter = false;
+    for (const std::string& n : notes) {
+      filter = filter || n.find("rfilter 'tent' replaced by box") != std::string::npos;
+      EXPECT_EQ(n.find(GDVR_SOURCE_DIR), std::string::npos) << n;
+    }
+    EXPECT_TRUE(filter) << "no note of the replaced pixel filter";
+  }
+}
+
 TEST(JobRunnerTest, SkippedFramesAreNotRenderedAgain) {
   JobSpec job = small_demo_job("0-3");
   JobRunOptions options;
