@@ -132,7 +132,7 @@ Expected<std::unique_ptr<FrameScene>> FrameScene::create(const Scene& scene, con
   }
   GDVR_RETURN_IF_ERROR(fs->accel_->commit());
   GDVR_RETURN_IF_ERROR(fs->prepare_emitters());
-  fs->diffuse_ = DiffuseScene::build(*fs, &fs->why_not_diffuse_);
+  fs->vector_ = VectorScene::build(*fs, &fs->why_not_vector_);
   return fs;
 }
 
@@ -277,7 +277,7 @@ Status FrameScene::update(const Scene& scene) {
   scene_.emitters = scene.emitters;
   scene_.camera = scene.camera;
   GDVR_RETURN_IF_ERROR(prepare_emitters());
-  if (diffuse_ && !diffuse_->refresh(*this, &why_not_diffuse_)) diffuse_.reset();
+  if (vector_ && !vector_->refresh(*this, &why_not_vector_)) vector_.reset();
   return Status::Ok();
 }
 

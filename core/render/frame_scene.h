@@ -12,7 +12,7 @@
 #include "core/math/bounds.h"
 #include "core/math/distribution.h"
 #include "core/math/rng.h"
-#include "core/render/diffuse_scene.h"
+#include "core/render/vector_scene.h"
 #include "core/render/ray.h"
 #include "core/scene/scene.h"
 
@@ -121,15 +121,15 @@ class FrameScene {
   // spot and directional lights are never hit by a ray).
   std::vector<Bounds3f> area_emitter_bounds() const;
 
-  // ---- The diffuse path batch (diffuse_batch.h) ----
-  // The scene as per-triangle records, where every surface is diffuse and
-  // every emitter an area light on a flat mesh; else null, and
-  // why_not_diffuse() names what the scene has that the records cannot hold.
-  const DiffuseScene* diffuse_scene() const { return diffuse_.get(); }
-  const std::string& why_not_diffuse() const { return why_not_diffuse_; }
+  // ---- The vector path batch (vector_batch.h) ----
+  // The scene as per-triangle records (vector_scene.h) where it has an
+  // emitter and a shape the vector kernel shades; else null, and
+  // why_not_vector() names what the scene has that the records cannot hold.
+  const VectorScene* vector_scene() const { return vector_.get(); }
+  const std::string& why_not_vector() const { return why_not_vector_; }
 
  private:
-  friend class DiffuseScene;  // reads ShapeState to lay out its records
+  friend class VectorScene;  // reads ShapeState to lay out its records
   struct ShapeState {
     std::shared_ptr<const TriangleMesh> mesh;  // world space if !instanced
     std::vector<Vec3f> face_normals;           // unit, same space as `mesh` (saves a cross + sqrt per hit)
@@ -194,8 +194,8 @@ class FrameScene {
   std::vector<ShapeState> shapes_;
   std::vector<Envmap> envmaps_;  // parallel to scene_.emitters (empty unless envmap)
   int environment_ = -1;         // index of the constant/envmap emitter
-  std::unique_ptr<DiffuseScene> diffuse_;
-  std::string why_not_diffuse_;
+  std::unique_ptr<VectorScene> vector_;
+  std::string why_not_vector_;
 };
 
 }  // namespace gdvr

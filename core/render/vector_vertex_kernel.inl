@@ -1,10 +1,10 @@
-// The vector batch's vertex on eight paths at once (diffuse_batch_state.h),
-// compiled once per instruction set: diffuse_vertex_avx2.cpp (-mavx2) and
-// diffuse_vertex_avx512.cpp (AVX-512F/VL/DQ on the same 8-lane vectors:
+// The vector batch's vertex on eight paths at once (vector_batch_state.h),
+// compiled once per instruction set: vector_vertex_avx2.cpp (-mavx2) and
+// vector_vertex_avx512.cpp (AVX-512F/VL/DQ on the same 8-lane vectors:
 // masks, and the 64-bit multiply of PCG32 in one instruction), each defining
-// GDVR_DIFFUSE_KERNEL as its entry point's name. diffuse_batch.cpp runs the
+// GDVR_VERTEX_KERNEL as its entry point's name. vector_batch.cpp runs the
 // best one the CPU has. Everything it uses is its own or an intrinsic: see
-// diffuse_batch_state.h for why.
+// vector_batch_state.h for why.
 //
 // Each step is the scalar code's in the same order, turned into lane masks:
 //   FrameScene::interaction (a triangle of a mesh), Frame,
@@ -23,10 +23,10 @@
 // A second entry point, GDVR_ENVIRONMENT_KERNEL, is add_emission for rays
 // that left the scene, where the environment is a map (environment_along).
 // No multiply-add is fused (-ffp-contract=off for the whole build), so the
-// vector and scalar forms round alike; DiffuseBatchTest checks every kernel
+// vector and scalar forms round alike; VectorBatchTest checks every kernel
 // against the scalar batch bit for bit.
-#if !defined(GDVR_DIFFUSE_KERNEL) || !defined(GDVR_ENVIRONMENT_KERNEL)
-#error "define GDVR_DIFFUSE_KERNEL and GDVR_ENVIRONMENT_KERNEL (the entry points' names) before including this file"
+#if !defined(GDVR_VERTEX_KERNEL) || !defined(GDVR_ENVIRONMENT_KERNEL)
+#error "define GDVR_VERTEX_KERNEL and GDVR_ENVIRONMENT_KERNEL (the entry points' names) before including this file"
 #endif
 
 #include <immintrin.h>
@@ -42,7 +42,7 @@
 #include "core/math/distribution.h"
 #include "core/math/elementary.h"  // coefficients only: the functions are repeated below
 #include "core/math/vec.h"
-#include "core/render/diffuse_batch_state.h"
+#include "core/render/vector_batch_state.h"
 #include "core/render/ray.h"
 #include "core/texture/texture.h"
 
@@ -92,11 +92,11 @@ template <class V>
 inline void store(void* p, V v) {
   std::memcpy(p, &v, sizeof v);
 }
-inline V3 load3(const float (*a)[kDiffuseBatch], int k) {
+inline V3 load3(const float (*a)[kVectorBatch], int k) {
   return {load<vf>(&a[0][k]), load<vf>(&a[1][k]), load<vf>(&a[2][k])};
 }
 // Stores the lanes in m; the others keep what they held.
-inline void store3(float (*a)[kDiffuseBatch], int k, V3 v, vi m) {
+inline void store3(float (*a)[kVectorBatch], int k, V3 v, vi m) {
   store(&a[0][k], vsel(m, v.x, load<vf>(&a[0][k])));
   store(&a[1][k], vsel(m, v.y, load<vf>(&a[1][k])));
   store(&a[2][k], vsel(m, v.z, load<vf>(&a[2][k])));
@@ -669,7 +669,7 @@ inline vf vacos_half_turns(vf c) {
 // direction_to_uv, envmap_lookup, envmap_direction_pdf with
 // Distribution2D::pdf) and the MIS-weighted sum, eight lanes of `lanes` at
 // a time.
-void add_environment_group(const DiffuseSceneView& scene, DiffuseBatchState* st, const int32_t* lanes, int n,
+void add_environment_group(const VectorSceneView& scene, VectorBatchState* st, const int32_t* lanes, int n,
                            bool hide_camera_rays) {
   const EnvmapRecord& env = *scene.envmap;
   alignas(32) float dl[3][kLanes], tl[3][kLanes], rl[3][kLanes], il[3][kLanes], prev_pdf[kLanes];
@@ -731,7 +731,7 @@ void add_environment_group(const DiffuseSceneView& scene, DiffuseBatchState* st,
   }
 }
 
-void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi shade) {
+void shade_group(const VectorSceneView& scene, VectorBatchState* st, int k, vi shade) {
   VPcg32 rng{load<vu64>(&st->rng_state[k]), load<vu64>(&st->rng_inc[k])};
   V3 throughput = load3(st->throughput, k);
   const vi depth = load<vi>(&st->depth[k]);
@@ -1067,13 +1067,13 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
 
 }  // namespace
 
-void GDVR_ENVIRONMENT_KERNEL(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+void GDVR_ENVIRONMENT_KERNEL(const VectorSceneView& scene, VectorBatchState* state, const int32_t* lanes, int n,
                              bool hide_camera_rays) {
   for (int k = 0; k < n; k += kLanes) add_environment_group(scene, state, lanes + k, n - k, hide_camera_rays);
 }
 
-void GDVR_DIFFUSE_KERNEL(const DiffuseSceneView& scene, DiffuseBatchState* state) {
-  for (int k = 0; k < kDiffuseBatch; k += kLanes) {
+void GDVR_VERTEX_KERNEL(const VectorSceneView& scene, VectorBatchState* state) {
+  for (int k = 0; k < kVectorBatch; k += kLanes) {
     const vi shade = load<vi>(&state->shade[k]) != 0;
     if (_mm256_testz_si256((__m256i)shade, (__m256i)shade)) continue;
     shade_group(scene, state, k, shade);
