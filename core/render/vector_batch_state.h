@@ -135,7 +135,7 @@ struct EnvmapRecord {
   const float* texels;  // `channels` floats per texel, rows of image_width
   int image_width, image_height, channels;
   double to_world[3][3];  // Transform::vector's rows
-  double to_local[3][3];  // the inverse's (FrameScene::Envmap::to_local)
+  double to_local[3][3];  // the inverse's (EnvmapTables::to_local)
   float scale;
   uint32_t emitter;  // its index among the scene's emitters
 };

@@ -222,7 +222,7 @@ void VectorScene::bake_emitters(const FrameScene& fs) {
   has_envmap_ = false;
   if (fs.environment_ >= 0 && scene.emitters[size_t(fs.environment_)].type == EmitterType::kEnvmap) {
     const Emitter& em = scene.emitters[size_t(fs.environment_)];
-    const FrameScene::Envmap& env = fs.envmaps_[size_t(fs.environment_)];
+    const EnvmapTables& env = fs.envmaps_[size_t(fs.environment_)];
     if (!env.distribution.empty()) {
       has_envmap_ = true;
       const Distribution2D& dist = env.distribution;
@@ -262,7 +262,7 @@ void VectorScene::bake_emitters(const FrameScene& fs) {
   // mesh; otherwise the kernel asks FrameScene lane by lane.
   for (const Emitter& em : scene.emitters) {
     if (em.type != EmitterType::kArea || scene.shapes[size_t(em.shape)].type != ShapeType::kMesh) return;
-    for (const FrameScene::ShapeState::EmitterTriangle& tri : fs.shapes_[size_t(em.shape)].emitter_triangles)
+    for (const EmitterTriangle& tri : fs.shapes_[size_t(em.shape)].emitter_triangles)
       if (!tri.face_normal) return;
   }
   for (size_t e = 0; e < scene.emitters.size(); ++e) {
@@ -270,7 +270,7 @@ void VectorScene::bake_emitters(const FrameScene& fs) {
     const FrameScene::ShapeState& s = fs.shapes_[size_t(em.shape)];
     emitter_first_[e] = uint32_t(emitter_triangles_.size());
     emitter_choice_[e] = &s.triangle_areas;
-    for (const FrameScene::ShapeState::EmitterTriangle& tri : s.emitter_triangles) {
+    for (const EmitterTriangle& tri : s.emitter_triangles) {
       EmitterTriangleRecord r;
       put3(r.p0, tri.p0);
       put3(r.p1, tri.p1);

@@ -9,9 +9,10 @@
 // Each step is the scalar code's in the same order, turned into lane masks:
 //   FrameScene::interaction (a triangle of a mesh), Frame,
 //   sample_emitter -> FrameScene::sample_emitter_direction (triangle area
-//   emitters; sphere area emitters from outside: sphere_point_in_cone,
-//   sincos_turns, sphere_cone_pdf; environment maps: sample_alias,
-//   uv_to_direction, envmap_lookup; others through view.sample_emitter),
+//   emitters: area_emitter.cpp; sphere area emitters from outside:
+//   sphere_point_in_cone, sincos_turns, sphere_cone_pdf; environment maps
+//   (environment_emitter.cpp): sample_alias, uv_to_direction, envmap_lookup;
+//   others through view.sample_emitter),
 //   connect_emitter -> diffuse_eval_pdf, rough_conductor_eval_pdf or
 //   plastic_eval_pdf (two-sided: mirror_to_front), mis_power, shadow_ray,
 //   draw_bsdf_numbers, sample_bsdf_drawn -> diffuse_sample,
@@ -432,7 +433,7 @@ inline V3 envmap_lookup(const EnvmapRecord& env, vi m, vf u, vf v) {
   return V3{bilinear(0), bilinear(1), bilinear(2)};
 }
 
-// FrameScene::sample_emitter_direction's environment map case for the lanes
+// sample_envmap_emitter (core/emitter/environment_emitter.cpp) for the lanes
 // in m, from (ux, uy): Distribution2D::sample (alias_picks),
 // uv_to_direction, Transform::vector, envmap_lookup (envmap_texels lane by
 // lane). Returns where a sample was
@@ -892,8 +893,8 @@ void shade_group(const VectorSceneView& scene, VectorBatchState* st, int k, vi s
     es_pdf = pdf_solid_angle * scene.select_pdf;
     weight = vsel3(vdot(ln, es_d) < 0.0f, radiance * (1.0f / es_pdf), V3{splat(0.0f), splat(0.0f), splat(0.0f)});
   } else {
-    // A uniform emitter; a sphere's from outside it here (FrameScene::
-    // sample_emitter_direction's cone sampling), other emitters (points,
+    // A uniform emitter; a sphere's from outside it here
+    // (sample_sphere_emitter_point's cone sampling), other emitters (points,
     // spots, directional lights, smooth area lights, a point inside a
     // sphere) by FrameScene itself, lane by lane.
     vi here = vi{};
