@@ -170,7 +170,7 @@ class FrameScene {
   std::unique_ptr<Accelerator> accel_;
   std::vector<ShapeState> shapes_;
   std::vector<EnvmapTables> envmaps_;  // parallel to scene_.emitters (empty unless envmap)
-  int environment_ = -1;         // index of the constant/envmap emitter
+  int environment_ = -1;               // index of the constant/envmap emitter
   std::unique_ptr<VectorScene> vector_;
   std::string why_not_vector_;
 };
