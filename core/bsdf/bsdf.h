@@ -122,7 +122,7 @@ bool bsdf_sample_from_slope(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, 
 // Plastic's diffuse base for a diffuse reflectance R: R / (1 - Fdr), or with
 // `nonlinear` R / (1 - R Fdr), Fdr the internal diffuse Fresnel reflectance
 // (smooth plastic: fdr_int). plastic.cpp scales it by the Fresnel
-// transmittances; the vector path batch keeps it per triangle (diffuse_scene.cpp).
+// transmittances; the vector path batch keeps it per triangle (vector_scene.cpp).
 Rgb plastic_diffuse_base(const Bsdf& b, Rgb reflectance, float internal_reflectance);
 
 }  // namespace gdvr

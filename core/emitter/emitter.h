@@ -1,7 +1,9 @@
 // Emitters of the Mitsuba 3 subset: area (one-sided, attached to a shape),
 // point, spot, directional, constant environment and importance-sampled
-// environment map. Data only; sampling lives in the render module, which knows
-// the frame's world-space geometry.
+// environment map. Data only: each kind's sampling is in a file of its own
+// here (area_emitter.h, point_emitter.h, directional_emitter.h,
+// environment_emitter.h); FrameScene picks the emitter and hands them the
+// frame's world-space geometry.
 #pragma once
 
 #include <memory>

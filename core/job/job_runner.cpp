@@ -8,7 +8,7 @@
 
 #include "core/gradient/gpt_integrator.h"
 #include "core/recon/reconstruct.h"
-#include "core/render/diffuse_batch.h"
+#include "core/render/vector_batch.h"
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
 #include "core/scene/scene_loader.h"
@@ -239,7 +239,7 @@ class JobRenderer {
       st.rays = r.rays;
       if (r.invalid_samples > 0) st.left_out.push_back(std::to_string(r.invalid_samples) + " non-finite samples dropped");
       st.left_out.push_back("gradient sampling and reconstruction: integrator pt");
-      const std::string scalar_why = why_no_diffuse_batch(*scene_, pj_.render.path, pj_.render.paths_in_flight);
+      const std::string scalar_why = why_no_vector_batch(*scene_, pj_.render.path, pj_.render.paths_in_flight);
       if (!scalar_why.empty()) st.left_out.push_back("the vector path batch's AVX2/AVX-512 kernel: " + scalar_why);
     }
     st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);

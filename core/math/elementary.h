@@ -3,7 +3,7 @@
 //
 // Why not libm: a vector kernel that shades eight paths at once must round
 // exactly as the scalar code does, so that a path's image does not depend on
-// which of them ran it (diffuse_batch.h). glibc's expf, logf and erff have
+// which of them ran it (vector_batch.h). glibc's expf, logf and erff have
 // no vector twins with their bits. These are short polynomial forms (Cephes'
 // expf, logf, erff and erfcf coefficients, S. L. Moshier) that a kernel can
 // repeat operation for operation; tests/core/math/elementary_test.cpp bounds

@@ -45,7 +45,7 @@ class Pcg32 {
   float next_float() { return static_cast<float>(next_u32() >> 8) * 0x1p-24f; }
 
   // The generator's two words, for code that advances many generators at
-  // once in vector registers (diffuse_batch.cpp) and hands them back.
+  // once in vector registers (vector_batch.cpp) and hands them back.
   uint64_t state() const { return state_; }
   uint64_t increment() const { return inc_; }
   void restore(uint64_t state, uint64_t increment) {

@@ -3,86 +3,12 @@
 #include <cmath>
 #include <string>
 
+#include "core/emitter/directional_emitter.h"
+#include "core/emitter/point_emitter.h"
 #include "core/math/arctan.h"
-#include "core/math/sampling.h"
 
 namespace gdvr {
 namespace {
-
-// Mitsuba's lat-long convention (envmap.cpp): u = atan2(x, -z) / 2pi, v = acos(y) / pi.
-Vec2f direction_to_uv(Vec3f d) {
-  const float u = atan2_turns(d.x, -d.z);
-  // u is in [-1/2, 1/2]: u - floor(u) without floor (a libm call or a long
-  // inline sequence without SSE4.1).
-  return {u < 0.0f ? u + 1.0f : u, acos_half_turns(d.y)};
-}
-
-Vec3f uv_to_direction(Vec2f uv, float* sin_theta) {
-  const SinCos theta = sincos_turns(0.5f * uv.y), phi = sincos_turns(uv.x);
-  *sin_theta = theta.sin;
-  return {phi.sin * theta.sin, theta.cos, -phi.cos * theta.sin};
-}
-
-// The four texels of a bilinear lookup, as Mitsuba 3's envmap: texel (i, j)
-// at u = (i + 1/2) / width, periodic in u (the lookup between the last and the
-// first column wraps), and at v = j / (height - 1). Texels at u = i / width
-// (the convention of earlier Mitsuba versions) shifted the whole map by half a
-// texel: matpreview rendered 0.3 % brighter than Mitsuba 3.9.
-struct BilinearTexels {
-  int x0, x1, y0, y1;
-  float fx, fy;
-};
-
-BilinearTexels envmap_texels(const Image& img, Vec2f uv) {
-  int w = img.width(), h = img.height();
-  // x counts from the centre of the column before column 0 (the last one,
-  // periodically): x in [1/2, w + 1/2] for u in [0, 1], so truncation is
-  // floor (std::floor is a libm call without SSE4.1; this runs for every
-  // environment lookup and prefetch).
-  float x = std::max(0.0f, uv.x) * float(w) + 0.5f, y = std::max(0.0f, uv.y) * float(h - 1);  // NaN -> 0
-  int xb = std::min(int(x), w), y0 = std::min(int(y), h - 1);
-  float fx = std::clamp(x - float(xb), 0.0f, 1.0f), fy = std::clamp(y - float(y0), 0.0f, 1.0f);
-  // Columns xb - 1 and xb, periodic: xb ∈ [0, w] (compares, not a division).
-  int x0 = xb - 1, x1 = xb;
-  if (x0 < 0) x0 += w;
-  if (x1 >= w) x1 -= w;
-  return {x0, x1, y0, std::min(y0 + 1, h - 1), fx, fy};
-}
-
-Rgb envmap_lookup(const Image& img, Vec2f uv) {
-  const BilinearTexels t = envmap_texels(img, uv);
-  return (img.rgb(t.x0, t.y0) * (1 - t.fx) + img.rgb(t.x1, t.y0) * t.fx) * (1 - t.fy) +
-         (img.rgb(t.x0, t.y1) * (1 - t.fx) + img.rgb(t.x1, t.y1) * t.fx) * t.fy;
-}
-
-// The piecewise-constant density that environment samples are drawn from:
-// per cell of a grid finer than the texels (the lookup is bilinear between
-// texel centres, so coarse cells leave L / pdf varying by up to 2x within a
-// cell around a small bright feature: 1.6-1.8x Mitsuba's variance, whose
-// sampling follows the bilinear lookup), the cell's luminance (its centre
-// and corners, so that no cell where the map is not black gets zero weight)
-// times sin(theta). 4 x 4 cells a texel matched Mitsuba's variance on the
-// generated scenes; maps with more than 256K texels get fewer, which keeps the
-// tables under 4M cells (their texels are small already).
-Distribution2D envmap_distribution(const Image& img) {
-  int k = 4;
-  while (k > 1 && size_t(k) * k * size_t(img.width()) * size_t(img.height()) > (size_t(1) << 22)) k /= 2;
-  const int w = k * img.width(), h = k * img.height();
-  std::vector<float> weights(size_t(w) * h);
-  for (int y = 0; y < h; ++y) {
-    const float sin_theta = std::sin(kPi * (float(y) + 0.5f) / float(h));
-    const float v0 = float(y) / float(h), v1 = float(y + 1) / float(h);
-    for (int x = 0; x < w; ++x) {
-      const float u0 = float(x) / float(w), u1 = float(x + 1) / float(w);
-      const float centre = luminance(envmap_lookup(img, {0.5f * (u0 + u1), 0.5f * (v0 + v1)}));
-      const float corners = luminance(envmap_lookup(img, {u0, v0})) + luminance(envmap_lookup(img, {u1, v0})) +
-                            luminance(envmap_lookup(img, {u0, v1})) + luminance(envmap_lookup(img, {u1, v1}));
-      const float lum = std::max(0.0f, 0.5f * centre + 0.125f * corners);
-      weights[size_t(y) * w + x] = std::isfinite(lum) ? lum * sin_theta : 0.0f;
-    }
-  }
-  return Distribution2D(weights, w, h);
-}
 
 float determinant_sign(const Transform& t) {
   const auto& m = t.matrix().m;
@@ -132,7 +58,7 @@ Expected<std::unique_ptr<FrameScene>> FrameScene::create(const Scene& scene, con
   }
   GDVR_RETURN_IF_ERROR(fs->accel_->commit());
   GDVR_RETURN_IF_ERROR(fs->prepare_emitters());
-  fs->diffuse_ = DiffuseScene::build(*fs, &fs->why_not_diffuse_);
+  fs->vector_ = VectorScene::build(*fs, &fs->why_not_vector_);
   return fs;
 }
 
@@ -201,8 +127,8 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
 Status FrameScene::prepare_emitters() {
   // An environment map's sampling tables depend on its image alone: an
   // update() that rotates it keeps them.
-  std::vector<Envmap> previous = std::move(envmaps_);
-  envmaps_.assign(scene_.emitters.size(), Envmap());
+  std::vector<EnvmapTables> previous = std::move(envmaps_);
+  envmaps_.assign(scene_.emitters.size(), EnvmapTables());
   environment_ = -1;
   for (size_t e = 0; e < scene_.emitters.size(); ++e) {
     const Emitter& em = scene_.emitters[e];
@@ -231,7 +157,7 @@ Status FrameScene::prepare_emitters() {
         std::vector<float> areas(m.triangle_count());
         s.emitter_triangles.resize(m.triangle_count());
         for (size_t t = 0; t < areas.size(); ++t) {
-          ShapeState::EmitterTriangle& tri = s.emitter_triangles[t];
+          EmitterTriangle& tri = s.emitter_triangles[t];
           tri.p0 = m.positions[m.indices[3 * t]];
           tri.p1 = m.positions[m.indices[3 * t + 1]];
           tri.p2 = m.positions[m.indices[3 * t + 2]];
@@ -277,7 +203,7 @@ Status FrameScene::update(const Scene& scene) {
   scene_.emitters = scene.emitters;
   scene_.camera = scene.camera;
   GDVR_RETURN_IF_ERROR(prepare_emitters());
-  if (diffuse_ && !diffuse_->refresh(*this, &why_not_diffuse_)) diffuse_.reset();
+  if (vector_ && !vector_->refresh(*this, &why_not_vector_)) vector_.reset();
   return Status::Ok();
 }
 
@@ -356,11 +282,12 @@ std::vector<Bounds3f> FrameScene::area_emitter_bounds() const {
   return bounds;
 }
 
+// Uniform emitter selection, as Mitsuba 3 does (keeps noise comparable),
+// then the emitter kind's own sampling (core/emitter/).
 EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref, float u_select, Vec2f u) const {
   EmitterSample es;
   size_t count = scene_.emitters.size();
   if (count == 0) return es;
-  // Uniform emitter selection, as Mitsuba 3 does (keeps noise comparable).
   float scaled = u_select * float(count);
   size_t index = std::min(size_t(scaled), count - 1);
   float select_pdf = 1.0f / float(count);
@@ -368,168 +295,49 @@ EmitterSample FrameScene::sample_emitter_direction(const SurfaceInteraction& ref
   es.emitter = int(index);
 
   switch (em.type) {
-    case EmitterType::kArea: {
-      const ShapeState& s = shapes_[size_t(em.shape)];
-      const Shape& shape = scene_.shapes[size_t(em.shape)];
-      Vec3f p, n;
-      float pdf_solid_angle = 0.0f;
-      bool area_measure = false;  // p was sampled by area: convert the pdf below
-      if (shape.type == ShapeType::kSphere) {
-        Vec3f dc = s.center - ref.p;
-        float dc2 = length_squared(dc);
-        float r2 = s.radius * s.radius;
-        if (dc2 > r2 * (1.0f + 1e-5f)) {
-          // Outside: sample the cone of directions the sphere subtends and
-          // place the point on the sphere from the cone angles (pbrt-v4's
-          // construction; sphere_point_in_cone). Intersecting the sampled ray
-          // with the sphere instead cancels catastrophically in float for a
-          // light 1e-3 of its distance across and put points on the far side
-          // (back-facing: zero radiance, a -0.2 % bias; docs/stability.md).
-          // The pdf is formed in double from (radius, distance) alone, exactly
-          // as pdf_shape_direction forms it, so that MIS sees equal pdfs; it
-          // is off the sample's dependency chain.
-          const SphereConePoint c = sphere_point_in_cone(r2 / dc2, u.y);
-          // The azimuth needs no care: an error of 1e-7 rad moves the point by 1e-7 radii.
-          const SinCos phi = sincos_turns(u.x);
-          const Frame frame(dc * (1.0f / std::sqrt(dc2)));  // z towards the centre
-          // Unit up to rounding (an orthonormal frame and a unit vector): no normalisation.
-          n = frame.to_world(Vec3f(-c.sin_c * phi.cos, -c.sin_c * phi.sin, -c.cos_c));
-          p = s.center + n * s.radius;
-          pdf_solid_angle = sphere_cone_pdf(double(dc2), double(s.radius) * double(s.radius));
-        } else {
-          // Inside (or on) the sphere: uniform area sampling.
-          n = square_to_uniform_sphere(u);
-          p = s.center + n * s.radius;
-          area_measure = true;
-        }
-        if (shape.flip_normals) n = -n;
-      } else {
-        float u_tri;
-        const size_t t = s.triangle_areas.sample(u.x, &u_tri);
-        const ShapeState::EmitterTriangle& tri = s.emitter_triangles[t];
-        Vec2f b = square_to_uniform_triangle({u_tri, u.y});
-        p = tri.p0 * (1.0f - b.x - b.y) + tri.p1 * b.x + tri.p2 * b.y;
-        n = tri.n;
-        if (!tri.face_normal) {
-          // tri.n has flip_normals applied; interpolated_normal() takes and
-          // returns normals before it (its fallback is the face normal).
-          const Vec3f face_n = shape.flip_normals ? -tri.n : tri.n;
-          n = interpolated_normal(s, uint32_t(t), b.x, b.y, face_n);
-          if (shape.flip_normals) n = -n;
-        }
-        area_measure = true;
-      }
-      Vec3f d = p - ref.p;
-      float dist2 = length_squared(d);
-      float dist = std::sqrt(dist2);
-      if (area_measure) {
-        // Area to solid angle: dist^2 / (area cos_l) with cos_l = |d.n| / dist,
-        // grouped so that no extra division or overflow enters.
-        float abs_dn = std::abs(dot(d, n));
-        pdf_solid_angle = abs_dn > 0 ? dist2 * (dist / (s.area * abs_dn)) : 0.0f;
-      }
-      if (!(dist > 0) || !(pdf_solid_angle > 0) || !std::isfinite(pdf_solid_angle)) return es;
-      es.d = d * (1.0f / dist);
-      es.dist = dist;
-      es.pdf = pdf_solid_angle * select_pdf;
-      // One-sided: emits only on the side its normal faces.
-      if (dot(n, es.d) < 0) es.weight = em.radiance / es.pdf;
-      return es;
-    }
+    case EmitterType::kArea: return sample_area_emitter(em, ref.p, u, select_pdf, es);
     case EmitterType::kPoint:
-    case EmitterType::kSpot: {
-      Vec3f pos = em.to_world.point(Vec3f(0.0f));
-      Vec3f d = pos - ref.p;
-      float dist2 = length_squared(d);
-      if (!(dist2 > 0)) return es;
-      es.dist = std::sqrt(dist2);
-      es.d = d / es.dist;
-      es.delta = true;
-      es.pdf = select_pdf;
-      Rgb intensity = em.intensity;
-      if (em.type == EmitterType::kSpot) {
-        Vec3f local = normalize(em.to_world.inverse().vector(-es.d));
-        float cos_theta = local.z;
-        float cos_cutoff = std::cos(radians(em.cutoff_angle));
-        float cos_beam = std::cos(radians(em.beam_width));
-        if (cos_theta <= cos_cutoff) return es;
-        if (cos_theta < cos_beam) {
-          // Mitsuba's spot: linear falloff in angle between beam_width and cutoff.
-          float falloff = (radians(em.cutoff_angle) - std::acos(cos_theta)) /
-                          (radians(em.cutoff_angle) - radians(em.beam_width));
-          intensity = intensity * std::clamp(falloff, 0.0f, 1.0f);
-        }
-      }
-      es.weight = intensity / (dist2 * select_pdf);
-      return es;
-    }
-    case EmitterType::kDirectional: {
-      Vec3f dir = normalize(em.to_world.vector({0, 0, 1}));
-      es.d = -dir;
-      es.dist = kInfinity;
-      es.delta = true;
-      es.pdf = select_pdf;
-      es.weight = em.irradiance / select_pdf;
-      return es;
-    }
-    case EmitterType::kConstant: {
-      es.d = square_to_uniform_sphere(u);
-      es.dist = kInfinity;
-      es.pdf = kInvFourPi * select_pdf;
-      es.weight = em.radiance / es.pdf;
-      return es;
-    }
-    case EmitterType::kEnvmap: {
-      const Envmap& env = envmaps_[index];
-      if (env.distribution.empty()) return es;
-      float pdf_uv;
-      Vec2f uv = env.distribution.sample(u, &pdf_uv);
-      float sin_theta;
-      Vec3f local = uv_to_direction(uv, &sin_theta);
-      if (!(sin_theta > 1e-7f) || !(pdf_uv > 0)) return es;
-      es.d = normalize(em.to_world.vector(local));
-      es.dist = kInfinity;
-      es.pdf = pdf_uv / (2.0f * kPi * kPi * sin_theta) * select_pdf;
-      // The radiance at the sampled uv itself (no round trip through the
-      // direction: two inverse trigonometric functions fewer).
-      es.weight = envmap_lookup(*em.envmap, uv) * em.scale / es.pdf;
-      return es;
-    }
+    case EmitterType::kSpot: return sample_point_emitter(em, ref.p, select_pdf, es);
+    case EmitterType::kDirectional: return sample_directional_emitter(em, select_pdf, es);
+    case EmitterType::kConstant: return sample_constant_emitter(em, u, select_pdf, es);
+    case EmitterType::kEnvmap: return sample_envmap_emitter(em, envmaps_[index], u, select_pdf, es);
   }
   return es;
 }
 
-Rgb FrameScene::eval_envmap(const Emitter& em, const Envmap& env, Vec3f d) const {
-  Vec3f local = normalize(env.to_local.vector(d));
-  return envmap_lookup(*em.envmap, direction_to_uv(local)) * em.scale;
-}
-
-float FrameScene::pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const {
-  const Shape& shape = scene_.shapes[size_t(hit.shape)];
+// The shape's world-space geometry is FrameScene's; the point and its
+// density are area_emitter.h's. A mesh whose vertex normals are not its face
+// normal emits along the normal interaction() would interpolate there.
+EmitterSample FrameScene::sample_area_emitter(const Emitter& em, Vec3f ref_p, Vec2f u, float select_pdf,
+                                              EmitterSample es) const {
+  const ShapeState& s = shapes_[size_t(em.shape)];
+  const Shape& shape = scene_.shapes[size_t(em.shape)];
+  AreaEmitterPoint pt;
   if (shape.type == ShapeType::kSphere) {
-    Vec3f dc = s.center - ref_p;
-    float dc2 = length_squared(dc), r2 = s.radius * s.radius;
-    if (dc2 > r2 * (1.0f + 1e-5f)) {
-      return sphere_cone_pdf(double(dc2), double(s.radius) * double(s.radius));
+    pt = sample_sphere_emitter_point(s.center, s.radius, shape.flip_normals, ref_p, u);
+  } else {
+    size_t t;
+    Vec2f b;
+    pt = sample_triangle_emitter_point(s.triangle_areas, s.emitter_triangles, u, &t, &b);
+    if (!s.emitter_triangles[t].face_normal) {
+      // pt.n has flip_normals applied; interpolated_normal() takes and
+      // returns normals before it (its fallback is the face normal).
+      const Vec3f face_n = shape.flip_normals ? -pt.n : pt.n;
+      pt.n = interpolated_normal(s, uint32_t(t), b.x, b.y, face_n);
+      if (shape.flip_normals) pt.n = -pt.n;
     }
   }
-  Vec3f d = hit.p - ref_p;
-  float dist2 = length_squared(d);
-  float cos_l = std::abs(dot(d, hit.sh_frame.n)) / std::sqrt(dist2);
-  return cos_l > 0 ? dist2 / (s.area * cos_l) : 0.0f;
+  return area_emitter_sample(ref_p, pt, s.area, em.radiance, select_pdf, es);
 }
 
 float FrameScene::pdf_emitter_direction(Vec3f ref_p, const SurfaceInteraction& hit) const {
   int e = emitter_of_shape(hit.shape);
   if (e < 0) return 0.0f;
-  return pdf_shape_direction(shapes_[size_t(hit.shape)], ref_p, hit) / float(scene_.emitters.size());
-}
-
-// Solid-angle density of an envmap sample at `local` (the envmap's frame), uv
-// its texture position; without emitter selection.
-float FrameScene::envmap_direction_pdf(const Envmap& env, Vec3f local, Vec2f uv) const {
-  const float sin_theta = std::sqrt(std::max(local.x * local.x + local.z * local.z, 1e-14f));
-  return env.distribution.pdf(uv) / (2.0f * kPi * kPi * sin_theta);
+  const ShapeState& s = shapes_[size_t(hit.shape)];
+  const float pdf = scene_.shapes[size_t(hit.shape)].type == ShapeType::kSphere
+                        ? sphere_emitter_pdf(s.center, s.radius, s.area, ref_p, hit.p, hit.sh_frame.n)
+                        : mesh_emitter_pdf(s.area, ref_p, hit.p, hit.sh_frame.n);
+  return pdf / float(scene_.emitters.size());
 }
 
 float FrameScene::pdf_environment_direction(Vec3f d) const {
@@ -537,9 +345,7 @@ float FrameScene::pdf_environment_direction(Vec3f d) const {
   const Emitter& em = scene_.emitters[size_t(environment_)];
   const float select_pdf = 1.0f / float(scene_.emitters.size());
   if (em.type == EmitterType::kConstant) return kInvFourPi * select_pdf;
-  const Envmap& env = envmaps_[size_t(environment_)];
-  const Vec3f local = normalize(env.to_local.vector(d));
-  return envmap_direction_pdf(env, local, direction_to_uv(local)) * select_pdf;
+  return envmap_pdf(envmaps_[size_t(environment_)], d) * select_pdf;
 }
 
 FrameScene::EnvironmentLookup FrameScene::environment_along(Vec3f d) const {
@@ -552,11 +358,9 @@ FrameScene::EnvironmentLookup FrameScene::environment_along(Vec3f d) const {
     out.pdf = kInvFourPi * select_pdf;
     return out;
   }
-  const Envmap& env = envmaps_[size_t(environment_)];
-  const Vec3f local = normalize(env.to_local.vector(d));
-  const Vec2f uv = direction_to_uv(local);
-  out.radiance = envmap_lookup(*em.envmap, uv) * em.scale;
-  out.pdf = envmap_direction_pdf(env, local, uv) * select_pdf;
+  const EnvmapLookup lookup = envmap_along(em, envmaps_[size_t(environment_)], d);
+  out.radiance = lookup.radiance;
+  out.pdf = lookup.pdf * select_pdf;
   return out;
 }
 
@@ -565,11 +369,7 @@ void FrameScene::prefetch_emitter_sample(float u_select, Vec2f u) const {
   if (count == 0) return;
   const size_t index = std::min(size_t(u_select * float(count)), count - 1);
   if (scene_.emitters[index].type != EmitterType::kEnvmap) return;
-  const Envmap& env = envmaps_[index];
-  const Vec2f uv = env.distribution.prefetch_sample(u);
-  const BilinearTexels t = envmap_texels(*env.image, uv);
-  env.image->prefetch_rgb(t.x0, t.y0);
-  env.image->prefetch_rgb(t.x0, t.y1);
+  prefetch_envmap_sample(envmaps_[index], u);
 }
 
 Rgb FrameScene::eval_area_emitter(const SurfaceInteraction& si) const {

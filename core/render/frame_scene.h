@@ -9,24 +9,17 @@
 #include <vector>
 
 #include "core/accel/accelerator.h"
+#include "core/emitter/area_emitter.h"
+#include "core/emitter/emitter_sample.h"
+#include "core/emitter/environment_emitter.h"
 #include "core/math/bounds.h"
 #include "core/math/distribution.h"
 #include "core/math/rng.h"
-#include "core/render/diffuse_scene.h"
+#include "core/render/vector_scene.h"
 #include "core/render/ray.h"
 #include "core/scene/scene.h"
 
 namespace gdvr {
-
-// A sampled direction towards an emitter, as Mitsuba's DirectionSample.
-struct EmitterSample {
-  Vec3f d;               // unit direction from the reference point
-  float dist = 0;        // to the emitter point (infinity for infinite emitters)
-  float pdf = 0;         // solid angle, including emitter selection (1 for deltas: see `delta`)
-  bool delta = false;
-  Rgb weight;            // Le / pdf (already divided; zero when it does not emit towards us)
-  int emitter = -1;
-};
 
 // The shadow ray from `si` towards the sampled emitter point, stopping short
 // of it (unbounded for an emitter at infinity). As Mitsuba's spawn_ray_to, it
@@ -121,15 +114,15 @@ class FrameScene {
   // spot and directional lights are never hit by a ray).
   std::vector<Bounds3f> area_emitter_bounds() const;
 
-  // ---- The diffuse path batch (diffuse_batch.h) ----
-  // The scene as per-triangle records, where every surface is diffuse and
-  // every emitter an area light on a flat mesh; else null, and
-  // why_not_diffuse() names what the scene has that the records cannot hold.
-  const DiffuseScene* diffuse_scene() const { return diffuse_.get(); }
-  const std::string& why_not_diffuse() const { return why_not_diffuse_; }
+  // ---- The vector path batch (vector_batch.h) ----
+  // The scene as per-triangle records (vector_scene.h) where it has an
+  // emitter and a shape the vector kernel shades; else null, and
+  // why_not_vector() names what the scene has that the records cannot hold.
+  const VectorScene* vector_scene() const { return vector_.get(); }
+  const std::string& why_not_vector() const { return why_not_vector_; }
 
  private:
-  friend class DiffuseScene;  // reads ShapeState to lay out its records
+  friend class VectorScene;  // reads ShapeState to lay out its records
   struct ShapeState {
     std::shared_ptr<const TriangleMesh> mesh;  // world space if !instanced
     std::vector<Vec3f> face_normals;           // unit, same space as `mesh` (saves a cross + sqrt per hit)
@@ -147,24 +140,9 @@ class FrameScene {
     Vec3f center;       // sphere, world space
     float radius = 0;   // sphere, world space
     Distribution1D triangle_areas;  // area emitters only
-    // Area emitters only: each triangle's corners in world space and, where
-    // the shading normal is the face normal, that normal (flip_normals
-    // applied). Sampling then reads one record instead of the index buffer,
-    // three vertices and two per-triangle tables (sample_emitter_direction).
-    struct EmitterTriangle {
-      Vec3f p0, p1, p2;
-      Vec3f n;
-      bool face_normal = true;  // false: interpolate the vertex normals at the sample
-    };
-    std::vector<EmitterTriangle> emitter_triangles;
+    std::vector<EmitterTriangle> emitter_triangles;  // area emitters only
     float area = 0;
   };
-  struct Envmap {
-    std::shared_ptr<const Image> image;
-    Distribution2D distribution;
-    Transform to_local;  // world -> the envmap's frame (to_world⁻¹, computed once)
-  };
-
   FrameScene() = default;
   Status build_shape_state(size_t i, bool animated);
   Status prepare_emitters();
@@ -185,17 +163,16 @@ class FrameScene {
     return s.instanced ? normalize(s.to_world.normal(s.face_normals[tri])) * s.handedness : s.face_normals[tri];
   }
   Vec3f interpolated_normal(const ShapeState& s, uint32_t tri, float b1, float b2, Vec3f face_n) const;
-  float pdf_shape_direction(const ShapeState& s, Vec3f ref_p, const SurfaceInteraction& hit) const;
-  Rgb eval_envmap(const Emitter& e, const Envmap& env, Vec3f d) const;
-  float envmap_direction_pdf(const Envmap& env, Vec3f local, Vec2f uv) const;
+  EmitterSample sample_area_emitter(const Emitter& em, Vec3f ref_p, Vec2f u, float select_pdf,
+                                    EmitterSample es) const;
 
   Scene scene_;
   std::unique_ptr<Accelerator> accel_;
   std::vector<ShapeState> shapes_;
-  std::vector<Envmap> envmaps_;  // parallel to scene_.emitters (empty unless envmap)
-  int environment_ = -1;         // index of the constant/envmap emitter
-  std::unique_ptr<DiffuseScene> diffuse_;
-  std::string why_not_diffuse_;
+  std::vector<EnvmapTables> envmaps_;  // parallel to scene_.emitters (empty unless envmap)
+  int environment_ = -1;               // index of the constant/envmap emitter
+  std::unique_ptr<VectorScene> vector_;
+  std::string why_not_vector_;
 };
 
 }  // namespace gdvr

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <memory>
 
-#include "core/render/diffuse_batch.h"
+#include "core/render/vector_batch.h"
 
 namespace gdvr {
 namespace {
@@ -91,15 +91,15 @@ void trace_tile_samples(const FrameScene& scene, const PathTracerSettings& setti
   const int batch = std::clamp(paths_in_flight, 1, kPathBatch);
   // A full batch of a scene with records goes to the vector batch, its paths
   // started in place; one path at a time (a benchmark's baseline) stays scalar.
-  const bool vector = settings.vector_kernels && batch == kPathBatch && diffuse_batch_available(scene);
-  std::unique_ptr<DiffuseBatchState> lanes(vector ? new DiffuseBatchState : nullptr);
+  const bool vector = settings.vector_kernels && batch == kPathBatch && vector_batch_available(scene);
+  std::unique_ptr<VectorBatchState> lanes(vector ? new VectorBatchState : nullptr);
   std::unique_ptr<PathState[]> paths(vector ? nullptr : new PathState[kPathBatch]);
   PathSample out[kPathBatch];
   RayStream stream;
   int px[kPathBatch], py[kPathBatch];
   int n = 0;
   auto flush = [&] {
-    if (vector) trace_started_diffuse_batch(scene, settings, lanes.get(), n, stream, counters, out);
+    if (vector) trace_started_vector_batch(scene, settings, lanes.get(), n, stream, counters, out);
     else trace_at_most_one_batch(scene, settings, paths.get(), n, stream, counters, out);
     for (int i = 0; i < n; ++i) add(px[i], py[i], out[i]);
     n = 0;

@@ -18,7 +18,7 @@ struct PathTracerSettings {
   int rr_depth = 5;
   bool hide_emitters = false;
   // The vector batch's AVX2/AVX-512 kernel where the scene and the CPU allow it
-  // (diffuse_batch.h). Off: the scalar batch, which gives the same image bit
+  // (vector_batch.h). Off: the scalar batch, which gives the same image bit
   // for bit (tests and benchmarks compare the two).
   bool vector_kernels = true;
 };

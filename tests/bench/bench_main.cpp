@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "core/render/diffuse_batch.h"
+#include "core/render/vector_batch.h"
 #include "core/render/frame_scene.h"
 #include "core/render/path_batch.h"
 #include "core/render/perspective_camera.h"
@@ -252,8 +252,8 @@ int main(int argc, char** argv) {
   std::printf("scene            %s\n", path.c_str());
   std::printf("resolution       %dx%d, %d spp, %d threads, %d runs (medians)\n", s.width, s.height, spp, thread_count, runs);
   std::printf("rays per render  %llu (recorded %zu)\n", (unsigned long long)pt_rays, cast_order.size());
-  const std::string scalar_why = why_no_diffuse_batch(frame_scene, s.path, s.paths_in_flight);
-  const std::string kernel = scalar_why.empty() ? std::string("vector batch, ") + diffuse_kernels().front().isa +
+  const std::string scalar_why = why_no_vector_batch(frame_scene, s.path, s.paths_in_flight);
+  const std::string kernel = scalar_why.empty() ? std::string("vector batch, ") + vector_kernels().front().isa +
                                                       " kernel"
                                                 : "scalar batch: the vector batch's kernel is left out, " + scalar_why;
   std::printf("path tracer      %.2f Mrays/s, %d paths in flight per thread (%s)\n", median(pt_rate) * 1e-6,

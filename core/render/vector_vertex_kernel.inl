@@ -1,17 +1,18 @@
-// The vector batch's vertex on eight paths at once (diffuse_batch_state.h),
-// compiled once per instruction set: diffuse_vertex_avx2.cpp (-mavx2) and
-// diffuse_vertex_avx512.cpp (AVX-512F/VL/DQ on the same 8-lane vectors:
+// The vector batch's vertex on eight paths at once (vector_batch_state.h),
+// compiled once per instruction set: vector_vertex_avx2.cpp (-mavx2) and
+// vector_vertex_avx512.cpp (AVX-512F/VL/DQ on the same 8-lane vectors:
 // masks, and the 64-bit multiply of PCG32 in one instruction), each defining
-// GDVR_DIFFUSE_KERNEL as its entry point's name. diffuse_batch.cpp runs the
+// GDVR_VERTEX_KERNEL as its entry point's name. vector_batch.cpp runs the
 // best one the CPU has. Everything it uses is its own or an intrinsic: see
-// diffuse_batch_state.h for why.
+// vector_batch_state.h for why.
 //
 // Each step is the scalar code's in the same order, turned into lane masks:
 //   FrameScene::interaction (a triangle of a mesh), Frame,
 //   sample_emitter -> FrameScene::sample_emitter_direction (triangle area
-//   emitters; sphere area emitters from outside: sphere_point_in_cone,
-//   sincos_turns, sphere_cone_pdf; environment maps: sample_alias,
-//   uv_to_direction, envmap_lookup; others through view.sample_emitter),
+//   emitters: area_emitter.cpp; sphere area emitters from outside:
+//   sphere_point_in_cone, sincos_turns, sphere_cone_pdf; environment maps
+//   (environment_emitter.cpp): sample_alias, uv_to_direction, envmap_lookup;
+//   others through view.sample_emitter),
 //   connect_emitter -> diffuse_eval_pdf, rough_conductor_eval_pdf or
 //   plastic_eval_pdf (two-sided: mirror_to_front), mis_power, shadow_ray,
 //   draw_bsdf_numbers, sample_bsdf_drawn -> diffuse_sample,
@@ -23,10 +24,10 @@
 // A second entry point, GDVR_ENVIRONMENT_KERNEL, is add_emission for rays
 // that left the scene, where the environment is a map (environment_along).
 // No multiply-add is fused (-ffp-contract=off for the whole build), so the
-// vector and scalar forms round alike; DiffuseBatchTest checks every kernel
+// vector and scalar forms round alike; VectorBatchTest checks every kernel
 // against the scalar batch bit for bit.
-#if !defined(GDVR_DIFFUSE_KERNEL) || !defined(GDVR_ENVIRONMENT_KERNEL)
-#error "define GDVR_DIFFUSE_KERNEL and GDVR_ENVIRONMENT_KERNEL (the entry points' names) before including this file"
+#if !defined(GDVR_VERTEX_KERNEL) || !defined(GDVR_ENVIRONMENT_KERNEL)
+#error "define GDVR_VERTEX_KERNEL and GDVR_ENVIRONMENT_KERNEL (the entry points' names) before including this file"
 #endif
 
 #include <immintrin.h>
@@ -42,7 +43,7 @@
 #include "core/math/distribution.h"
 #include "core/math/elementary.h"  // coefficients only: the functions are repeated below
 #include "core/math/vec.h"
-#include "core/render/diffuse_batch_state.h"
+#include "core/render/vector_batch_state.h"
 #include "core/render/ray.h"
 #include "core/texture/texture.h"
 
@@ -92,11 +93,11 @@ template <class V>
 inline void store(void* p, V v) {
   std::memcpy(p, &v, sizeof v);
 }
-inline V3 load3(const float (*a)[kDiffuseBatch], int k) {
+inline V3 load3(const float (*a)[kVectorBatch], int k) {
   return {load<vf>(&a[0][k]), load<vf>(&a[1][k]), load<vf>(&a[2][k])};
 }
 // Stores the lanes in m; the others keep what they held.
-inline void store3(float (*a)[kDiffuseBatch], int k, V3 v, vi m) {
+inline void store3(float (*a)[kVectorBatch], int k, V3 v, vi m) {
   store(&a[0][k], vsel(m, v.x, load<vf>(&a[0][k])));
   store(&a[1][k], vsel(m, v.y, load<vf>(&a[1][k])));
   store(&a[2][k], vsel(m, v.z, load<vf>(&a[2][k])));
@@ -432,7 +433,7 @@ inline V3 envmap_lookup(const EnvmapRecord& env, vi m, vf u, vf v) {
   return V3{bilinear(0), bilinear(1), bilinear(2)};
 }
 
-// FrameScene::sample_emitter_direction's environment map case for the lanes
+// sample_envmap_emitter (core/emitter/environment_emitter.cpp) for the lanes
 // in m, from (ux, uy): Distribution2D::sample (alias_picks),
 // uv_to_direction, Transform::vector, envmap_lookup (envmap_texels lane by
 // lane). Returns where a sample was
@@ -669,7 +670,7 @@ inline vf vacos_half_turns(vf c) {
 // direction_to_uv, envmap_lookup, envmap_direction_pdf with
 // Distribution2D::pdf) and the MIS-weighted sum, eight lanes of `lanes` at
 // a time.
-void add_environment_group(const DiffuseSceneView& scene, DiffuseBatchState* st, const int32_t* lanes, int n,
+void add_environment_group(const VectorSceneView& scene, VectorBatchState* st, const int32_t* lanes, int n,
                            bool hide_camera_rays) {
   const EnvmapRecord& env = *scene.envmap;
   alignas(32) float dl[3][kLanes], tl[3][kLanes], rl[3][kLanes], il[3][kLanes], prev_pdf[kLanes];
@@ -731,12 +732,85 @@ void add_environment_group(const DiffuseSceneView& scene, DiffuseBatchState* st,
   }
 }
 
-void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi shade) {
-  VPcg32 rng{load<vu64>(&st->rng_state[k]), load<vu64>(&st->rng_inc[k])};
-  V3 throughput = load3(st->throughput, k);
-  const vi depth = load<vi>(&st->depth[k]);
+// ---- The stages of one vertex (shade_group), each the scalar stage of the
+// same name on eight lanes, run in path_stages.h's order ----
 
-  // ---- The hit (FrameScene::interaction) ----
+// Forced inline: shade_group was one function, and GCC (-O3) left the
+// bigger stages as calls that pass the hit's vectors through memory.
+#define GDVR_STAGE inline __attribute__((always_inline))
+
+// Frame(n) (Duff et al.): the tangents s and t of the frame around unit n.
+inline void vframe(V3 n, V3* s, V3* t) {
+  const vf sign = (vf)(((vu)n.z & 0x80000000u) | 0x3f800000u);  // copysign(1, n.z)
+  const vf a = -1.0f / (sign + n.z);
+  const vf b = n.x * n.y * a;
+  *s = V3{1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
+  *t = V3{b, sign + n.y * n.y * a, -n.y};
+}
+
+// What FrameScene::interaction and the BSDF's reflectance give a hit.
+struct VertexHit {
+  vu flags;    // the shape's kShape* flags
+  V3 p;        // the hit point
+  V3 n;        // the face normal, flip_normals applied
+  V3 ns;       // the shading normal
+  V3 albedo;   // the reflectance (a plastic's diffuse base), textured where the shape is
+  vf offset_floor;
+};
+
+// FrameScene::interpolated_normal from the shading record's vertex normals:
+// interpolated and normalised, the face normal where that fails, then
+// flip_normals (the record's sign).
+GDVR_STAGE V3 interpolated_normal_lanes(const RecordLanes& sr, vf b0, vf b1, vf b2, V3 n, vi smooth) {
+  const V3 n0{sr.f[0], sr.f[1], sr.f[2]}, n1{sr.f[3], sr.f[4], sr.f[5]}, n2{sr.f[6], sr.f[7], sr.f[8]};
+  V3 interp = n0 * b0 + n1 * b1 + n2 * b2;
+  const vf l2 = vdot(interp, interp);
+  interp = vsel3(l2 > 0.0f, interp * (1.0f / vsqrt(l2)), interp);
+  const vi ok = finite(interp.x) & finite(interp.y) & finite(interp.z) & (vdot(interp, interp) > 0.5f);
+  return vsel3(smooth & ok, interp * sr.f[9], n);
+}
+
+// A textured reflectance at the hit's uv (the mesh's, interpolated, or the
+// barycentrics): a checkerboard here (Texture::eval_varying's arithmetic),
+// other textures by eval_varying lane by lane.
+GDVR_STAGE V3 textured_reflectance(const VectorSceneView& scene, const VectorBatchState* st, int k,
+                                   const RecordLanes& sr, vu flags, vi textured, vf b0, vf b1, vf b2) {
+  const vi has_uvs = (flags & kShapeHasUvs) != 0u;
+  const vf u = vsel(has_uvs, sr.f[10] * b0 + sr.f[12] * b1 + sr.f[14] * b2, b1);
+  const vf v = vsel(has_uvs, sr.f[11] * b0 + sr.f[13] * b1 + sr.f[15] * b2, b2);
+  const vi checker = textured & ((flags & kShapeCheckerboard) != 0u);
+  const vi other = textured & ~checker;
+  V3 texture_value{splat(0.0f), splat(0.0f), splat(0.0f)};
+  if (!_mm256_testz_si256((__m256i)checker, (__m256i)checker)) {
+    uint32_t shape_lanes[kLanes];
+    for (int i = 0; i < kLanes; ++i) shape_lanes[i] = checker[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
+    const RecordLanes c = load_records(scene.shape_checkerboard, shape_lanes);
+    const vf tu = c.f[0] * u + c.f[1] * v + c.f[2], tv = c.f[3] * u + c.f[4] * v + c.f[5];  // UvTransform
+    const vi mx = tu - vfloor(tu) > 0.5f, my = tv - vfloor(tv) > 0.5f;
+    texture_value = vsel3(mx == my, V3{c.f[6], c.f[7], c.f[8]}, V3{c.f[9], c.f[10], c.f[11]});
+  }
+  if (!_mm256_testz_si256((__m256i)other, (__m256i)other)) {
+    alignas(32) float r[kLanes], g[kLanes], bl[kLanes];
+    for (int i = 0; i < kLanes; ++i) {
+      r[i] = g[i] = bl[i] = 0.0f;
+      if (!other[i]) continue;
+      const Texture* texture = scene.shape_texture[st->hit_shape[k + i]];
+      Vec2f uv;  // field by field: Vec2f's constructor is gdvr inline code
+      uv.x = u[i];
+      uv.y = v[i];
+      const Rgb c = texture->eval_varying(uv);
+      r[i] = c.r, g[i] = c.g, bl[i] = c.b;
+    }
+    texture_value = vsel3(other, V3{load<vf>(r), load<vf>(g), load<vf>(bl)}, texture_value);
+  }
+  return texture_value;
+}
+
+// FrameScene::interaction on a triangle of a mesh, from its record (and its
+// shading record where the triangle interpolates vertex normals or is
+// textured).
+GDVR_STAGE VertexHit interaction_lanes(const VectorSceneView& scene, const VectorBatchState* st, int k, vi shade) {
+  VertexHit hit;
   uint32_t tri[kLanes];
   alignas(32) uint32_t flag_lanes[kLanes];
   for (int i = 0; i < kLanes; ++i) {
@@ -744,313 +818,319 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
     tri[i] = shade[i] ? scene.shape_first[shape] + uint32_t(st->hit_prim[k + i]) : 0u;
     flag_lanes[i] = shade[i] ? scene.shape_flags[shape] : 0u;
   }
-  const vu flags = load<vu>(flag_lanes);
+  hit.flags = load<vu>(flag_lanes);
   const RecordLanes h = load_records(scene.triangles, tri);
   const V3 c0{h.f[0], h.f[1], h.f[2]}, c1{h.f[3], h.f[4], h.f[5]}, c2{h.f[6], h.f[7], h.f[8]};
-  const V3 n{h.f[9], h.f[10], h.f[11]};
-  V3 albedo{h.f[12], h.f[13], h.f[14]};
-  const vf offset_floor = vabs(h.f[15]);
+  hit.n = V3{h.f[9], h.f[10], h.f[11]};
+  hit.albedo = V3{h.f[12], h.f[13], h.f[14]};
+  hit.offset_floor = vabs(h.f[15]);
   const vi smooth = shade & ((vi)h.f[15] < 0);  // the sign bit
-  const vi textured = (flags & kShapeTextured) != 0u;
+  const vi textured = (hit.flags & kShapeTextured) != 0u;
   const vf b1 = load<vf>(&st->hit_u[k]), b2 = load<vf>(&st->hit_v[k]);
   const vf b0 = 1.0f - b1 - b2;
-  const V3 p = c0 * b0 + c1 * b1 + c2 * b2;
-  V3 ns = n;
+  hit.p = c0 * b0 + c1 * b1 + c2 * b2;
+  hit.ns = hit.n;
   const vi needs_shading_record = smooth | textured;
   if (!_mm256_testz_si256((__m256i)needs_shading_record, (__m256i)needs_shading_record)) {
     const RecordLanes sr = load_records(scene.shading, tri);
-    // The shading normal: the face normal, or (FrameScene::interpolated_normal)
-    // the vertex normals interpolated and normalised, the face normal where
-    // that fails, then flip_normals.
-    if (!_mm256_testz_si256((__m256i)smooth, (__m256i)smooth)) {
-      const V3 n0{sr.f[0], sr.f[1], sr.f[2]}, n1{sr.f[3], sr.f[4], sr.f[5]}, n2{sr.f[6], sr.f[7], sr.f[8]};
-      V3 interp = n0 * b0 + n1 * b1 + n2 * b2;
-      const vf l2 = vdot(interp, interp);
-      interp = vsel3(l2 > 0.0f, interp * (1.0f / vsqrt(l2)), interp);
-      const vi ok = finite(interp.x) & finite(interp.y) & finite(interp.z) & (vdot(interp, interp) > 0.5f);
-      ns = vsel3(smooth & ok, interp * sr.f[9], n);
-    }
-    // A textured reflectance at the hit's uv (the mesh's, interpolated, or
-    // the barycentrics): a checkerboard here (Texture::eval_varying's
-    // arithmetic), other textures by eval_varying lane by lane.
-    if (!_mm256_testz_si256((__m256i)textured, (__m256i)textured)) {
-      const vi has_uvs = (flags & kShapeHasUvs) != 0u;
-      const vf u = vsel(has_uvs, sr.f[10] * b0 + sr.f[12] * b1 + sr.f[14] * b2, b1);
-      const vf v = vsel(has_uvs, sr.f[11] * b0 + sr.f[13] * b1 + sr.f[15] * b2, b2);
-      const vi checker = textured & ((flags & kShapeCheckerboard) != 0u);
-      const vi other = textured & ~checker;
-      V3 texture_value{splat(0.0f), splat(0.0f), splat(0.0f)};
-      if (!_mm256_testz_si256((__m256i)checker, (__m256i)checker)) {
-        uint32_t shape_lanes[kLanes];
-        for (int i = 0; i < kLanes; ++i) shape_lanes[i] = checker[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
-        const RecordLanes c = load_records(scene.shape_checkerboard, shape_lanes);
-        const vf tu = c.f[0] * u + c.f[1] * v + c.f[2], tv = c.f[3] * u + c.f[4] * v + c.f[5];  // UvTransform
-        const vi mx = tu - vfloor(tu) > 0.5f, my = tv - vfloor(tv) > 0.5f;
-        texture_value = vsel3(mx == my, V3{c.f[6], c.f[7], c.f[8]}, V3{c.f[9], c.f[10], c.f[11]});
-      }
-      if (!_mm256_testz_si256((__m256i)other, (__m256i)other)) {
-        alignas(32) float r[kLanes], g[kLanes], bl[kLanes];
-        for (int i = 0; i < kLanes; ++i) {
-          r[i] = g[i] = bl[i] = 0.0f;
-          if (!other[i]) continue;
-          const Texture* texture = scene.shape_texture[st->hit_shape[k + i]];
-          Vec2f uv;  // field by field: Vec2f's constructor is gdvr inline code
-          uv.x = u[i];
-          uv.y = v[i];
-          const Rgb c = texture->eval_varying(uv);
-          r[i] = c.r, g[i] = c.g, bl[i] = c.b;
-        }
-        texture_value = vsel3(other, V3{load<vf>(r), load<vf>(g), load<vf>(bl)}, texture_value);
-      }
-      albedo = vsel3(textured, texture_value, albedo);
-    }
+    if (!_mm256_testz_si256((__m256i)smooth, (__m256i)smooth))
+      hit.ns = interpolated_normal_lanes(sr, b0, b1, b2, hit.n, smooth);
+    if (!_mm256_testz_si256((__m256i)textured, (__m256i)textured))
+      hit.albedo = vsel3(textured, textured_reflectance(scene, st, k, sr, hit.flags, textured, b0, b1, b2), hit.albedo);
   }
-  // Frame(ns) (Duff et al.).
-  const vf sign = (vf)(((vu)ns.z & 0x80000000u) | 0x3f800000u);  // copysign(1, ns.z)
-  const vf a = -1.0f / (sign + ns.z);
-  const vf b = ns.x * ns.y * a;
-  const V3 fs{1.0f + sign * ns.x * ns.x * a, sign * b, -sign * ns.x};
-  const V3 ft{b, sign + ns.y * ns.y * a, -ns.y};
+  return hit;
+}
+
+// The shading frame, wo in it, and the BSDF parameters of the lanes that
+// are not diffuse: what both the emitter connection and the BSDF sample
+// read.
+struct VertexBsdf {
+  V3 fs, ft;         // the shading frame's tangents (ns its normal)
+  vi mirrored;       // a two-sided BSDF hit from the back
+  vf wo_front_z;     // wo's cosine, mirrored to the front
+  vi conductor, plastic;
+  bool any_conductor, any_plastic;
+  V3 wo_local;       // si.wi mirrored to the front; set where a lane is a conductor or plastic
+  VConductor cond;
+  vf g1_wo;          // cond.g1_of(wo_local)
+  VPlastic plas;
+  vf f_o;            // plastic's Fresnel reflectance of wo
+};
+
+GDVR_STAGE VertexBsdf bsdf_lanes(const VectorSceneView& scene, const VectorBatchState* st, int k, vi shade,
+                                 const VertexHit& hit) {
+  VertexBsdf b{};
+  vframe(hit.ns, &b.fs, &b.ft);
   const V3 wo_world = -load3(st->d, k);
-  const vf wo_z = vdot(wo_world, ns);
+  const vf wo_z = vdot(wo_world, hit.ns);
   // Mitsuba's twosided (bsdf.cpp, mirror_to_front): a query from the back
   // mirrors both directions to the front, and a sample back again.
-  const vi mirrored = ((flags & kShapeTwoSided) != 0u) & ~(wo_z >= 0.0f);
-  const vf wo_front_z = vsel(mirrored, -wo_z, wo_z);
-  // Lanes on a rough conductor: its parameters, and wo in the shading frame
-  // (si.wi, mirrored to the front).
-  const vi conductor = shade & ((flags & kShapeConductor) != 0u);
-  const bool any_conductor = !_mm256_testz_si256((__m256i)conductor, (__m256i)conductor);
-  const vi plastic = shade & ((flags & kShapePlastic) != 0u);
-  const bool any_plastic = !_mm256_testz_si256((__m256i)plastic, (__m256i)plastic);
-  const V3 wo_local =
-      any_conductor || any_plastic ? V3{vdot(wo_world, fs), vdot(wo_world, ft), wo_front_z} : V3{};
-  VConductor cond{};
-  vf g1_wo{};
-  if (any_conductor) {
+  b.mirrored = ((hit.flags & kShapeTwoSided) != 0u) & ~(wo_z >= 0.0f);
+  b.wo_front_z = vsel(b.mirrored, -wo_z, wo_z);
+  b.conductor = shade & ((hit.flags & kShapeConductor) != 0u);
+  b.any_conductor = !_mm256_testz_si256((__m256i)b.conductor, (__m256i)b.conductor);
+  b.plastic = shade & ((hit.flags & kShapePlastic) != 0u);
+  b.any_plastic = !_mm256_testz_si256((__m256i)b.plastic, (__m256i)b.plastic);
+  if (b.any_conductor || b.any_plastic)
+    b.wo_local = V3{vdot(wo_world, b.fs), vdot(wo_world, b.ft), b.wo_front_z};
+  if (b.any_conductor) {
     uint32_t shape_lanes[kLanes];
-    for (int i = 0; i < kLanes; ++i) shape_lanes[i] = conductor[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
+    for (int i = 0; i < kLanes; ++i) shape_lanes[i] = b.conductor[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
     const RecordLanes c = load_records(scene.shape_conductor, shape_lanes);
-    cond.alpha_u = c.f[0];
-    cond.alpha_v = c.f[1];
-    cond.eta = V3{c.f[2], c.f[3], c.f[4]};
-    cond.k = V3{c.f[5], c.f[6], c.f[7]};
-    cond.specular = V3{c.f[8], c.f[9], c.f[10]};
-    g1_wo = cond.g1_of(wo_local);
+    b.cond.alpha_u = c.f[0];
+    b.cond.alpha_v = c.f[1];
+    b.cond.eta = V3{c.f[2], c.f[3], c.f[4]};
+    b.cond.k = V3{c.f[5], c.f[6], c.f[7]};
+    b.cond.specular = V3{c.f[8], c.f[9], c.f[10]};
+    b.g1_wo = b.cond.g1_of(b.wo_local);
   }
-  // Lanes on smooth plastic: its parameters, and the Fresnel reflectance of wo.
-  VPlastic plas{};
-  vf f_o{};
-  if (any_plastic) {
+  if (b.any_plastic) {
     uint32_t shape_lanes[kLanes];
-    for (int i = 0; i < kLanes; ++i) shape_lanes[i] = plastic[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
+    for (int i = 0; i < kLanes; ++i) shape_lanes[i] = b.plastic[i] ? uint32_t(st->hit_shape[k + i]) : 0u;
     const RecordLanes c = load_records(scene.shape_plastic, shape_lanes);
-    plas.eta = c.f[0];
-    plas.rcp_eta = c.f[1];
-    plas.inv_eta2 = c.f[2];
-    plas.specular_weight = c.f[3];
-    plas.specular = V3{c.f[4], c.f[5], c.f[6]};
-    f_o = plas.fresnel(wo_front_z);
+    b.plas.eta = c.f[0];
+    b.plas.rcp_eta = c.f[1];
+    b.plas.inv_eta2 = c.f[2];
+    b.plas.specular_weight = c.f[3];
+    b.plas.specular = V3{c.f[4], c.f[5], c.f[6]};
+    b.f_o = b.plas.fresnel(b.wo_front_z);
   }
+  return b;
+}
 
-  // ---- sample_emitter ----
-  const vf u_select = rng.next_float(shade);
-  const vf ux = rng.next_float(shade), uy = rng.next_float(shade);
-  V3 es_d{}, weight{};
-  vf dist{}, es_pdf{};
-  vi sampled, delta = vi{};
-  if (scene.emitter_triangles) {
-    // A uniform emitter, an area-weighted triangle, a point on it.
-    uint32_t etri[kLanes];
-    alignas(32) float u_tri_lanes[kLanes];
-    for (int i = 0; i < kLanes; ++i) {
-      etri[i] = 0;
-      u_tri_lanes[i] = 0.0f;
-      if (!shade[i]) continue;
-      const float scaled = u_select[i] * float(scene.emitter_count);
-      uint32_t index = uint32_t(scaled);
-      if (index > scene.emitter_count - 1) index = scene.emitter_count - 1;
-      float u_tri;
-      const size_t t = scene.emitter_choice[index]->sample(ux[i], &u_tri);
-      etri[i] = scene.emitter_first[index] + uint32_t(t);
-      u_tri_lanes[i] = u_tri;
-    }
-    const RecordLanes e = load_records(scene.emitter_triangles, etri);
-    const V3 lp0{e.f[0], e.f[1], e.f[2]}, lp1{e.f[3], e.f[4], e.f[5]}, lp2{e.f[6], e.f[7], e.f[8]};
-    const V3 ln{e.f[9], e.f[10], e.f[11]}, radiance{e.f[12], e.f[13], e.f[14]};
-    const vf area = e.f[15];
-    const vf tt = safe_vsqrt(1.0f - load<vf>(u_tri_lanes));  // square_to_uniform_triangle
-    const vf lb1 = 1.0f - tt, lb2 = tt * uy;
-    const V3 lp = lp0 * (1.0f - lb1 - lb2) + lp1 * lb1 + lp2 * lb2;
-    const V3 to_light = lp - p;
-    const vf dist2 = vdot(to_light, to_light);
-    dist = vsqrt(dist2);
-    const vf abs_dn = vabs(vdot(to_light, ln));
-    const vf pdf_solid_angle = vsel(abs_dn > 0.0f, dist2 * (dist / (area * abs_dn)), splat(0.0f));
-    sampled = (dist > 0.0f) & (pdf_solid_angle > 0.0f) & finite(pdf_solid_angle);
-    es_d = to_light * (1.0f / dist);
-    es_pdf = pdf_solid_angle * scene.select_pdf;
-    weight = vsel3(vdot(ln, es_d) < 0.0f, radiance * (1.0f / es_pdf), V3{splat(0.0f), splat(0.0f), splat(0.0f)});
-  } else {
-    // A uniform emitter; a sphere's from outside it here (FrameScene::
-    // sample_emitter_direction's cone sampling), other emitters (points,
-    // spots, directional lights, smooth area lights, a point inside a
-    // sphere) by FrameScene itself, lane by lane.
-    vi here = vi{};
-    alignas(32) uint32_t index[kLanes];
-    for (int i = 0; i < kLanes; ++i) {
-      const uint32_t e = uint32_t(u_select[i] * float(scene.emitter_count));
-      index[i] = shade[i] ? (e < scene.emitter_count - 1 ? e : scene.emitter_count - 1) : 0u;
-    }
-    if (scene.emitter_spheres) {
-      const RecordLanes sp = load_records(scene.emitter_spheres, index);
-      const V3 center{sp.f[0], sp.f[1], sp.f[2]}, radiance{sp.f[4], sp.f[5], sp.f[6]};
-      const vf radius = sp.f[3], flip = sp.f[7];
-      const V3 dc = center - p;
-      const vf dc2 = vdot(dc, dc), r2 = radius * radius;
-      here = shade & (radius > 0.0f) & (dc2 > r2 * (1.0f + 1e-5f));
-      if (!_mm256_testz_si256((__m256i)here, (__m256i)here)) {
-        vf sin_c, cos_c, sin_phi, cos_phi;
-        sphere_point_in_cone(r2 / dc2, uy, &sin_c, &cos_c);
-        vsincos_turns(ux, &sin_phi, &cos_phi);
-        const V3 wz = dc * (1.0f / vsqrt(dc2));  // Frame(wz), z towards the centre
-        const vf fsign = (vf)(((vu)wz.z & 0x80000000u) | 0x3f800000u);
-        const vf fa = -1.0f / (fsign + wz.z);
-        const vf fb = wz.x * wz.y * fa;
-        const V3 fx{1.0f + fsign * wz.x * wz.x * fa, fsign * fb, -fsign * wz.x};
-        const V3 fy{fb, fsign + wz.y * wz.y * fa, -wz.y};
-        V3 ln = fx * (-sin_c * cos_phi) + fy * (-sin_c * sin_phi) + wz * (-cos_c);
-        const V3 lp = center + ln * radius;
-        const vd dc2d = to_double(dc2), r2d = to_double(radius) * to_double(radius);
-        const vd diff = dc2d - r2d;
-        const vf pdf_solid_angle =
-            to_single((dc2d + vsqrt_d(dc2d * vsel_d(0.0 < diff, diff, vd{}))) / (2.0 * double(kPi) * r2d));
-        ln = vsel3(flip < 0.0f, -ln, ln);
-        const V3 to_light = lp - p;
-        const vf sdist = vsqrt(vdot(to_light, to_light));
-        const vi ok = (sdist > 0.0f) & (pdf_solid_angle > 0.0f) & finite(pdf_solid_angle);
-        const V3 sd = to_light * (1.0f / sdist);
-        const vf spdf = pdf_solid_angle * scene.select_pdf;
-        const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
-        es_d = vsel3(here, sd, zero);
-        dist = vsel(here, sdist, splat(0.0f));
-        es_pdf = vsel(here, spdf, splat(0.0f));
-        weight = vsel3(here & ok & (vdot(ln, sd) < 0.0f), radiance * (1.0f / spdf), zero);
-      }
-    }
-    if (scene.envmap) {
-      const vi env = shade & ~here & ((vu)load<vi>(index) == scene.envmap->emitter);
-      if (!_mm256_testz_si256((__m256i)env, (__m256i)env)) {
-        V3 env_d, env_weight;
-        vf env_pdf;
-        const vi ok = sample_envmap(*scene.envmap, scene.select_pdf, env, ux, uy, &env_d, &env_pdf, &env_weight);
-        const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
-        es_d = vsel3(ok, env_d, es_d);
-        dist = vsel(ok, splat(kInfinity), dist);
-        es_pdf = vsel(ok, env_pdf, es_pdf);
-        weight = vsel3(ok, env_weight, vsel3(env, zero, weight));
-        here |= env;
-      }
-    }
-    alignas(32) float d[3][kLanes], w[3][kLanes], dist_lanes[kLanes], pdf_lanes[kLanes];
-    alignas(32) int32_t delta_lanes[kLanes];
-    const vi elsewhere = shade & ~here;
-    if (!_mm256_testz_si256((__m256i)elsewhere, (__m256i)elsewhere)) {
-      for (int i = 0; i < kLanes; ++i) {
-        EmitterSampleLane es{};
-        if (elsewhere[i]) {
-          const float pl[3] = {p.x[i], p.y[i], p.z[i]};
-          scene.sample_emitter(scene.frame_scene, pl, u_select[i], ux[i], uy[i], &es);
-        }
-        d[0][i] = es.d[0], d[1][i] = es.d[1], d[2][i] = es.d[2];
-        w[0][i] = es.weight[0], w[1][i] = es.weight[1], w[2][i] = es.weight[2];
-        dist_lanes[i] = es.dist;
-        pdf_lanes[i] = es.pdf;
-        delta_lanes[i] = es.delta;
-      }
-      es_d = vsel3(here, es_d, V3{load<vf>(d[0]), load<vf>(d[1]), load<vf>(d[2])});
-      weight = vsel3(here, weight, V3{load<vf>(w[0]), load<vf>(w[1]), load<vf>(w[2])});
-      dist = vsel(here, dist, load<vf>(dist_lanes));
-      es_pdf = vsel(here, es_pdf, load<vf>(pdf_lanes));
-      delta = load<vi>(delta_lanes);
-    }
-    sampled = shade;  // the weight is zero where nothing was sampled
+// sample_emitter's EmitterSample on eight lanes. `sampled`: where a sample
+// was made (elsewhere its weight may be garbage).
+struct EmitterLanes {
+  V3 d{}, weight{};
+  vf dist{}, pdf{};
+  vi sampled{}, delta{};
+};
+
+// Where every emitter is a flat-shaded mesh light: a uniform emitter, an
+// area-weighted triangle, a point on it (area_emitter.cpp).
+GDVR_STAGE EmitterLanes sample_triangle_emitters(const VectorSceneView& scene, vi shade, V3 p, vf u_select, vf ux,
+                                                 vf uy) {
+  EmitterLanes es;
+  uint32_t etri[kLanes];
+  alignas(32) float u_tri_lanes[kLanes];
+  for (int i = 0; i < kLanes; ++i) {
+    etri[i] = 0;
+    u_tri_lanes[i] = 0.0f;
+    if (!shade[i]) continue;
+    const float scaled = u_select[i] * float(scene.emitter_count);
+    uint32_t index = uint32_t(scaled);
+    if (index > scene.emitter_count - 1) index = scene.emitter_count - 1;
+    float u_tri;
+    const size_t t = scene.emitter_choice[index]->sample(ux[i], &u_tri);
+    etri[i] = scene.emitter_first[index] + uint32_t(t);
+    u_tri_lanes[i] = u_tri;
   }
+  const RecordLanes e = load_records(scene.emitter_triangles, etri);
+  const V3 lp0{e.f[0], e.f[1], e.f[2]}, lp1{e.f[3], e.f[4], e.f[5]}, lp2{e.f[6], e.f[7], e.f[8]};
+  const V3 ln{e.f[9], e.f[10], e.f[11]}, radiance{e.f[12], e.f[13], e.f[14]};
+  const vf area = e.f[15];
+  const vf tt = safe_vsqrt(1.0f - load<vf>(u_tri_lanes));  // square_to_uniform_triangle
+  const vf lb1 = 1.0f - tt, lb2 = tt * uy;
+  const V3 lp = lp0 * (1.0f - lb1 - lb2) + lp1 * lb1 + lp2 * lb2;
+  const V3 to_light = lp - p;
+  const vf dist2 = vdot(to_light, to_light);
+  es.dist = vsqrt(dist2);
+  const vf abs_dn = vabs(vdot(to_light, ln));
+  const vf pdf_solid_angle = vsel(abs_dn > 0.0f, dist2 * (es.dist / (area * abs_dn)), splat(0.0f));
+  es.sampled = (es.dist > 0.0f) & (pdf_solid_angle > 0.0f) & finite(pdf_solid_angle);
+  es.d = to_light * (1.0f / es.dist);
+  es.pdf = pdf_solid_angle * scene.select_pdf;
+  es.weight = vsel3(vdot(ln, es.d) < 0.0f, radiance * (1.0f / es.pdf), V3{splat(0.0f), splat(0.0f), splat(0.0f)});
+  return es;
+}
 
-  // ---- connect_emitter: the BSDF towards it, MIS, the shadow ray ----
-  const vf wl_z = vsel(mirrored, -vdot(es_d, ns), vdot(es_d, ns));
+// Lanes whose emitter (`index`) is a sphere light seen from outside: the
+// cone sampling of sample_sphere_emitter_point (area_emitter.cpp). Returns
+// those lanes; *es holds their samples, zero elsewhere.
+GDVR_STAGE vi sample_sphere_emitters(const VectorSceneView& scene, vi shade, V3 p, const uint32_t index[kLanes], vf ux,
+                                     vf uy, EmitterLanes* es) {
+  const RecordLanes sp = load_records(scene.emitter_spheres, index);
+  const V3 center{sp.f[0], sp.f[1], sp.f[2]}, radiance{sp.f[4], sp.f[5], sp.f[6]};
+  const vf radius = sp.f[3], flip = sp.f[7];
+  const V3 dc = center - p;
+  const vf dc2 = vdot(dc, dc), r2 = radius * radius;
+  const vi here = shade & (radius > 0.0f) & (dc2 > r2 * (1.0f + 1e-5f));
+  if (_mm256_testz_si256((__m256i)here, (__m256i)here)) return here;
+  vf sin_c, cos_c, sin_phi, cos_phi;
+  sphere_point_in_cone(r2 / dc2, uy, &sin_c, &cos_c);
+  vsincos_turns(ux, &sin_phi, &cos_phi);
+  const V3 wz = dc * (1.0f / vsqrt(dc2));  // Frame(wz), z towards the centre
+  V3 fx, fy;
+  vframe(wz, &fx, &fy);
+  V3 ln = fx * (-sin_c * cos_phi) + fy * (-sin_c * sin_phi) + wz * (-cos_c);
+  const V3 lp = center + ln * radius;
+  const vd dc2d = to_double(dc2), r2d = to_double(radius) * to_double(radius);
+  const vd diff = dc2d - r2d;
+  const vf pdf_solid_angle =
+      to_single((dc2d + vsqrt_d(dc2d * vsel_d(0.0 < diff, diff, vd{}))) / (2.0 * double(kPi) * r2d));
+  ln = vsel3(flip < 0.0f, -ln, ln);
+  const V3 to_light = lp - p;
+  const vf sdist = vsqrt(vdot(to_light, to_light));
+  const vi ok = (sdist > 0.0f) & (pdf_solid_angle > 0.0f) & finite(pdf_solid_angle);
+  const V3 sd = to_light * (1.0f / sdist);
+  const vf spdf = pdf_solid_angle * scene.select_pdf;
+  const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
+  es->d = vsel3(here, sd, zero);
+  es->dist = vsel(here, sdist, splat(0.0f));
+  es->pdf = vsel(here, spdf, splat(0.0f));
+  es->weight = vsel3(here & ok & (vdot(ln, sd) < 0.0f), radiance * (1.0f / spdf), zero);
+  return here;
+}
+
+// Lanes whose emitter is the environment map (and not taken yet, `here`):
+// sample_envmap_emitter (environment_emitter.cpp). Returns `here` with them.
+GDVR_STAGE vi sample_envmap_emitter_lanes(const VectorSceneView& scene, vi shade, vi here, const uint32_t index[kLanes],
+                                          vf ux, vf uy, EmitterLanes* es) {
+  const vi env = shade & ~here & ((vu)load<vi>(index) == scene.envmap->emitter);
+  if (_mm256_testz_si256((__m256i)env, (__m256i)env)) return here;
+  V3 env_d, env_weight;
+  vf env_pdf;
+  const vi ok = sample_envmap(*scene.envmap, scene.select_pdf, env, ux, uy, &env_d, &env_pdf, &env_weight);
+  const V3 zero{splat(0.0f), splat(0.0f), splat(0.0f)};
+  es->d = vsel3(ok, env_d, es->d);
+  es->dist = vsel(ok, splat(kInfinity), es->dist);
+  es->pdf = vsel(ok, env_pdf, es->pdf);
+  es->weight = vsel3(ok, env_weight, vsel3(env, zero, es->weight));
+  return here | env;
+}
+
+// The lanes `elsewhere` (points, spots, directional lights, smooth area
+// lights, a point inside a sphere) by FrameScene's own sampling, lane by lane.
+GDVR_STAGE void sample_emitters_in_frame_scene(const VectorSceneView& scene, vi elsewhere, vi here, V3 p, vf u_select,
+                                               vf ux, vf uy, EmitterLanes* es) {
+  alignas(32) float d[3][kLanes], w[3][kLanes], dist_lanes[kLanes], pdf_lanes[kLanes];
+  alignas(32) int32_t delta_lanes[kLanes];
+  for (int i = 0; i < kLanes; ++i) {
+    EmitterSampleLane lane{};
+    if (elsewhere[i]) {
+      const float pl[3] = {p.x[i], p.y[i], p.z[i]};
+      scene.sample_emitter(scene.frame_scene, pl, u_select[i], ux[i], uy[i], &lane);
+    }
+    d[0][i] = lane.d[0], d[1][i] = lane.d[1], d[2][i] = lane.d[2];
+    w[0][i] = lane.weight[0], w[1][i] = lane.weight[1], w[2][i] = lane.weight[2];
+    dist_lanes[i] = lane.dist;
+    pdf_lanes[i] = lane.pdf;
+    delta_lanes[i] = lane.delta;
+  }
+  es->d = vsel3(here, es->d, V3{load<vf>(d[0]), load<vf>(d[1]), load<vf>(d[2])});
+  es->weight = vsel3(here, es->weight, V3{load<vf>(w[0]), load<vf>(w[1]), load<vf>(w[2])});
+  es->dist = vsel(here, es->dist, load<vf>(dist_lanes));
+  es->pdf = vsel(here, es->pdf, load<vf>(pdf_lanes));
+  es->delta = load<vi>(delta_lanes);
+}
+
+// sample_emitter with the three numbers it draws: a uniform emitter, then
+// its kind's sample (core/emitter/), here where the kernel has the kind's
+// records, else by FrameScene.
+GDVR_STAGE EmitterLanes sample_emitter_lanes(const VectorSceneView& scene, vi shade, V3 p, vf u_select, vf ux, vf uy) {
+  if (scene.emitter_triangles) return sample_triangle_emitters(scene, shade, p, u_select, ux, uy);
+  EmitterLanes es;
+  vi here = vi{};
+  alignas(32) uint32_t index[kLanes];
+  for (int i = 0; i < kLanes; ++i) {
+    const uint32_t e = uint32_t(u_select[i] * float(scene.emitter_count));
+    index[i] = shade[i] ? (e < scene.emitter_count - 1 ? e : scene.emitter_count - 1) : 0u;
+  }
+  if (scene.emitter_spheres) here = sample_sphere_emitters(scene, shade, p, index, ux, uy, &es);
+  if (scene.envmap) here = sample_envmap_emitter_lanes(scene, shade, here, index, ux, uy, &es);
+  const vi elsewhere = shade & ~here;
+  if (!_mm256_testz_si256((__m256i)elsewhere, (__m256i)elsewhere))
+    sample_emitters_in_frame_scene(scene, elsewhere, here, p, u_select, ux, uy, &es);
+  es.sampled = shade;  // the weight is zero where nothing was sampled
+  return es;
+}
+
+// connect_emitter: the BSDF towards the emitter sample, MIS, and the shadow
+// ray with its contribution, left for the driver to trace.
+GDVR_STAGE void connect_emitter_lanes(VectorBatchState* st, int k, vi shade, V3 throughput, const VertexHit& hit,
+                                      const VertexBsdf& b, const EmitterLanes& es) {
+  const vf wl_z = vsel(b.mirrored, -vdot(es.d, hit.ns), vdot(es.d, hit.ns));
   // diffuse_eval_pdf's test is `wo.z <= 0 || wi.z <= 0`, kept as written for NaN.
-  const vi diffuse_lit = ~(wo_front_z <= 0.0f) & ~(wl_z <= 0.0f);
+  const vi diffuse_lit = ~(b.wo_front_z <= 0.0f) & ~(wl_z <= 0.0f);
   vf bsdf_pdf = kInvPi * wl_z;
-  V3 f = albedo * bsdf_pdf;
-  if (any_conductor) {
+  V3 f = hit.albedo * bsdf_pdf;
+  if (b.any_conductor) {
     V3 fc;
     vf pc;
-    cond.eval_pdf(wo_local, g1_wo, V3{vdot(es_d, fs), vdot(es_d, ft), wl_z}, &fc, &pc);
-    f = vsel3(conductor, fc, f);
-    bsdf_pdf = vsel(conductor, pc, bsdf_pdf);
+    b.cond.eval_pdf(b.wo_local, b.g1_wo, V3{vdot(es.d, b.fs), vdot(es.d, b.ft), wl_z}, &fc, &pc);
+    f = vsel3(b.conductor, fc, f);
+    bsdf_pdf = vsel(b.conductor, pc, bsdf_pdf);
   }
-  if (any_plastic) {
+  if (b.any_plastic) {
     V3 fp;
     vf pp;
-    plas.eval_pdf(albedo, wo_front_z, f_o, wl_z, &fp, &pp);
-    f = vsel3(plastic, fp, f);
-    bsdf_pdf = vsel(plastic, pp, bsdf_pdf);
+    b.plas.eval_pdf(hit.albedo, b.wo_front_z, b.f_o, wl_z, &fp, &pp);
+    f = vsel3(b.plastic, fp, f);
+    bsdf_pdf = vsel(b.plastic, pp, bsdf_pdf);
   }
-  const vi lit = shade & sampled & ~is_black(weight) & (conductor | plastic | diffuse_lit);
+  const vi lit = shade & es.sampled & ~is_black(es.weight) & (b.conductor | b.plastic | diffuse_lit);
   const vi connect = lit & ~is_black(f);
-  const vf w = vsel(delta, splat(1.0f), mis_power(es_pdf, bsdf_pdf));
-  store3(st->shadow_contribution, k, throughput * f * weight * w, connect);
+  const vf w = vsel(es.delta, splat(1.0f), mis_power(es.pdf, bsdf_pdf));
+  store3(st->shadow_contribution, k, throughput * f * es.weight * w, connect);
   // shadow_ray(): aimed from the offset origin at the emitter point.
-  const V3 shadow_o = offset_p(p, offset_floor, n, es_d);
-  const V3 to_target = (p + es_d * dist) - shadow_o;
+  const V3 shadow_o = offset_p(hit.p, hit.offset_floor, hit.n, es.d);
+  const V3 to_target = (hit.p + es.d * es.dist) - shadow_o;
   const vf to_len = vsqrt(vdot(to_target, to_target));
-  const vi finite_dist = ~(dist == kInfinity);
+  const vi finite_dist = ~(es.dist == kInfinity);
   const vi reaches = finite_dist & (to_len > 0.0f);
   store3(st->shadow_o, k, shadow_o, connect);
-  store3(st->shadow_d, k, vsel3(reaches, to_target * (1.0f / to_len), es_d), connect);
+  store3(st->shadow_d, k, vsel3(reaches, to_target * (1.0f / to_len), es.d), connect);
   store1(st->shadow_tmax, k,
          vsel(finite_dist, vsel(reaches, to_len * (1.0f - kShadowEpsilon), splat(0.0f)), splat(kInfinity)), connect);
   store1(st->shadow_pending, k, connect, shade);
+}
 
-  // ---- draw_bsdf_numbers, then sample_bsdf_drawn ----
-  const vf u_lobe = rng.next_float(shade);  // read by plastic alone (one lobe elsewhere)
-  const vf vx = rng.next_float(shade), vy = rng.next_float(shade);
+// sample_bsdf_drawn with the numbers draw_bsdf_numbers drew: the bounce's
+// direction, weight and pdf, the next ray and the MIS state it carries.
+// Updates *throughput; returns the lanes whose path goes on.
+GDVR_STAGE vi sample_bsdf_lanes(VectorBatchState* st, int k, vi shade, const VertexHit& hit, const VertexBsdf& b,
+                                vf u_lobe, vf vx, vf vy, V3* throughput) {
   V3 wi = cosine_hemisphere(vx, vy);
   vf pdf = kInvPi * wi.z;
-  vi alive = shade & ~conductor & ~plastic & ~(wo_front_z <= 0.0f) & (pdf > 0.0f) & ~is_black(albedo);
-  V3 bsdf_weight = albedo;
+  vi alive = shade & ~b.conductor & ~b.plastic & ~(b.wo_front_z <= 0.0f) & (pdf > 0.0f) & ~is_black(hit.albedo);
+  V3 bsdf_weight = hit.albedo;
   vi delta_lobe = vi{};
-  if (any_plastic) {
+  if (b.any_plastic) {
     V3 wi_p, weight_p;
     vf pdf_p;
     vi delta_p;
-    const vi ok = plas.sample(albedo, wo_local, f_o, u_lobe, wi, &wi_p, &weight_p, &pdf_p, &delta_p);
-    alive |= plastic & ok & ~is_black(weight_p);
-    wi = vsel3(plastic, wi_p, wi);
-    bsdf_weight = vsel3(plastic, weight_p, bsdf_weight);
-    pdf = vsel(plastic, pdf_p, pdf);
-    delta_lobe = plastic & delta_p;
+    const vi ok = b.plas.sample(hit.albedo, b.wo_local, b.f_o, u_lobe, wi, &wi_p, &weight_p, &pdf_p, &delta_p);
+    alive |= b.plastic & ok & ~is_black(weight_p);
+    wi = vsel3(b.plastic, wi_p, wi);
+    bsdf_weight = vsel3(b.plastic, weight_p, bsdf_weight);
+    pdf = vsel(b.plastic, pdf_p, pdf);
+    delta_lobe = b.plastic & delta_p;
   }
-  if (any_conductor) {
+  if (b.any_conductor) {
     V3 wi_c, weight_c;
     vf pdf_c;
-    const vi ok = cond.sample(wo_local, g1_wo, vx, vy, &wi_c, &weight_c, &pdf_c);
-    alive |= conductor & ok & ~is_black(weight_c);
-    wi = vsel3(conductor, wi_c, wi);
-    bsdf_weight = vsel3(conductor, weight_c, bsdf_weight);
-    pdf = vsel(conductor, pdf_c, pdf);
+    const vi ok = b.cond.sample(b.wo_local, b.g1_wo, vx, vy, &wi_c, &weight_c, &pdf_c);
+    alive |= b.conductor & ok & ~is_black(weight_c);
+    wi = vsel3(b.conductor, wi_c, wi);
+    bsdf_weight = vsel3(b.conductor, weight_c, bsdf_weight);
+    pdf = vsel(b.conductor, pdf_c, pdf);
   }
-  throughput = vsel3(alive, throughput * bsdf_weight, throughput);
-  const V3 next_d = fs * wi.x + ft * wi.y + ns * vsel(mirrored, -wi.z, wi.z);  // Frame::to_world
-  store3(st->o, k, offset_p(p, offset_floor, n, next_d), alive);
+  *throughput = vsel3(alive, *throughput * bsdf_weight, *throughput);
+  const V3 next_d = b.fs * wi.x + b.ft * wi.y + hit.ns * vsel(b.mirrored, -wi.z, wi.z);  // Frame::to_world
+  store3(st->o, k, offset_p(hit.p, hit.offset_floor, hit.n, next_d), alive);
   store3(st->d, k, next_d, alive);
   store1(st->tmin, k, splat(0.0f), alive);
   store1(st->tmax, k, splat(kInfinity), alive);
-  store3(st->prev_p, k, p, alive);
+  store3(st->prev_p, k, hit.p, alive);
   store1(st->prev_pdf, k, pdf, alive);
   store1(st->prev_delta, k, delta_lobe, alive);
-  // Russian roulette (the kernel's BSDFs leave eta as it is).
+  return alive;
+}
+
+// Russian roulette (the kernel's BSDFs leave eta as it is), then the path's
+// new throughput, depth and whether it continues.
+GDVR_STAGE void russian_roulette_lanes(const VectorSceneView& scene, VectorBatchState* st, int k, vi shade, vi depth,
+                                       vi alive, V3 throughput, VPcg32& rng) {
   const vf throughput_max = vmax(throughput.x, vmax(throughput.y, throughput.z));
   alive &= throughput_max > 0.0f;
   const vi rr = alive & (depth + 1 >= scene.rr_depth);
@@ -1062,18 +1142,40 @@ void shade_group(const DiffuseSceneView& scene, DiffuseBatchState* st, int k, vi
   store3(st->throughput, k, throughput, shade);
   store1(st->depth, k, depth + 1, alive);
   store1(st->continues, k, alive, shade);
+}
+
+// One vertex on the lanes of group k marked in `shade`. The random numbers
+// are drawn here, in the scalar stages' order, so that every lane's stream
+// stays the scalar path's.
+void shade_group(const VectorSceneView& scene, VectorBatchState* st, int k, vi shade) {
+  VPcg32 rng{load<vu64>(&st->rng_state[k]), load<vu64>(&st->rng_inc[k])};
+  V3 throughput = load3(st->throughput, k);
+  const vi depth = load<vi>(&st->depth[k]);
+  const VertexHit hit = interaction_lanes(scene, st, k, shade);
+  const VertexBsdf bsdf = bsdf_lanes(scene, st, k, shade, hit);
+
+  const vf u_select = rng.next_float(shade);
+  const vf ux = rng.next_float(shade), uy = rng.next_float(shade);
+  const EmitterLanes es = sample_emitter_lanes(scene, shade, hit.p, u_select, ux, uy);
+  connect_emitter_lanes(st, k, shade, throughput, hit, bsdf, es);
+
+  const vf u_lobe = rng.next_float(shade);  // read by plastic alone (one lobe elsewhere)
+  const vf vx = rng.next_float(shade), vy = rng.next_float(shade);
+  const vi alive = sample_bsdf_lanes(st, k, shade, hit, bsdf, u_lobe, vx, vy, &throughput);
+  russian_roulette_lanes(scene, st, k, shade, depth, alive, throughput, rng);
   store(&st->rng_state[k], rng.state);
 }
+#undef GDVR_STAGE
 
 }  // namespace
 
-void GDVR_ENVIRONMENT_KERNEL(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+void GDVR_ENVIRONMENT_KERNEL(const VectorSceneView& scene, VectorBatchState* state, const int32_t* lanes, int n,
                              bool hide_camera_rays) {
   for (int k = 0; k < n; k += kLanes) add_environment_group(scene, state, lanes + k, n - k, hide_camera_rays);
 }
 
-void GDVR_DIFFUSE_KERNEL(const DiffuseSceneView& scene, DiffuseBatchState* state) {
-  for (int k = 0; k < kDiffuseBatch; k += kLanes) {
+void GDVR_VERTEX_KERNEL(const VectorSceneView& scene, VectorBatchState* state) {
+  for (int k = 0; k < kVectorBatch; k += kLanes) {
     const vi shade = load<vi>(&state->shade[k]) != 0;
     if (_mm256_testz_si256((__m256i)shade, (__m256i)shade)) continue;
     shade_group(scene, state, k, shade);

@@ -1,9 +1,9 @@
-// The vector path batch (core/render/diffuse_batch.h) against the scalar
-// batch: on scenes that FrameScene lays out as records (diffuse and rough
-// conductor meshes; spheres and other BSDFs by the scalar stages), every path's
-// radiance must be the same bit for bit, through the same rays cast in the
-// same streams, whatever max_depth, Russian roulette depth and emitter
-// visibility; and scenes that do not fit must say why.
+// The vector path batch (core/render/vector_batch.h) against the scalar
+// batch: on scenes that FrameScene lays out as records (diffuse, rough
+// conductor and smooth plastic meshes; spheres and other BSDFs by the scalar
+// stages), every path's radiance must be the same bit for bit, through the
+// same rays cast in the same streams, whatever max_depth, Russian roulette
+// depth and emitter visibility; and scenes that do not fit must say why.
 #include <gtest/gtest.h>
 
 #include <cctype>
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "core/render/diffuse_batch.h"
+#include "core/render/vector_batch.h"
 #include "core/render/path_batch.h"
 #include "core/render/pt_integrator.h"
 #include "tests/core/gradient/gpt_test_util.h"
@@ -58,7 +58,7 @@ std::unique_ptr<FrameScene> load_xml_scene(const std::string& xml, const std::st
 // With `animated`, the fan and the red panel are animated (instanced) shapes.
 constexpr size_t kFan = 1, kRedPanel = 4;
 std::unique_ptr<FrameScene> load_room(Scene* desc, bool animated = false) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "gdvr_diffuse_batch_test";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "gdvr_vector_batch_test";
   std::filesystem::create_directories(dir);
   {
     std::ofstream obj(dir / "fan.obj");
@@ -123,17 +123,17 @@ std::unique_ptr<FrameScene> load_scene_without_records(Scene* desc) {
   </scene>)", std::filesystem::temp_directory_path().string(), desc, {});
 }
 
-TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
+TEST(VectorSceneTest, QualifyingScenesHaveRecordsAndOthersSayWhyNot) {
   auto cbox = load_test_scene("cbox", kW, kH);
   ASSERT_TRUE(cbox);
-  EXPECT_NE(cbox->scene->diffuse_scene(), nullptr) << cbox->scene->why_not_diffuse();
-  EXPECT_GT(cbox->scene->diffuse_scene()->memory_bytes(), 0u);
+  EXPECT_NE(cbox->scene->vector_scene(), nullptr) << cbox->scene->why_not_vector();
+  EXPECT_GT(cbox->scene->vector_scene()->memory_bytes(), 0u);
   Scene room_desc;
   auto room = load_room(&room_desc);
   ASSERT_TRUE(room);
-  EXPECT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  EXPECT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
   // The walls' checkerboard is the kernel's; the bitmap panel's texture is called.
-  const DiffuseSceneView& rv = room->diffuse_scene()->view();
+  const VectorSceneView& rv = room->vector_scene()->view();
   EXPECT_EQ(rv.shape_flags[0] & (kShapeTextured | kShapeCheckerboard), kShapeTextured | kShapeCheckerboard);
   EXPECT_EQ(rv.shape_checkerboard[0].a, 5.0f);
   EXPECT_EQ(rv.shape_flags[5] & (kShapeTextured | kShapeCheckerboard), kShapeTextured);
@@ -142,8 +142,8 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   // scalar stages (kShapeScalar), and next-event estimation asks FrameScene.
   auto veach = load_test_scene("veach-mis", kW, kH);
   ASSERT_TRUE(veach);
-  ASSERT_NE(veach->scene->diffuse_scene(), nullptr) << veach->scene->why_not_diffuse();
-  const DiffuseSceneView& vv = veach->scene->diffuse_scene()->view();
+  ASSERT_NE(veach->scene->vector_scene(), nullptr) << veach->scene->why_not_vector();
+  const VectorSceneView& vv = veach->scene->vector_scene()->view();
   EXPECT_EQ(vv.emitter_triangles, nullptr);
   int conductors = 0, scalar = 0;
   for (size_t i = 0; i < veach->desc.shapes.size(); ++i) {
@@ -156,8 +156,8 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   // plastic shape shaded, all by the kernel.
   auto matpreview = load_test_scene("matpreview", kW, kH);
   ASSERT_TRUE(matpreview);
-  ASSERT_NE(matpreview->scene->diffuse_scene(), nullptr) << matpreview->scene->why_not_diffuse();
-  const DiffuseSceneView& mv = matpreview->scene->diffuse_scene()->view();
+  ASSERT_NE(matpreview->scene->vector_scene(), nullptr) << matpreview->scene->why_not_vector();
+  const VectorSceneView& mv = matpreview->scene->vector_scene()->view();
   EXPECT_NE(mv.shape_flags[0] & kShapeTextured, 0u);  // the checkerboard floor
   EXPECT_EQ(mv.shape_flags[1] & ~kShapeHasUvs, 0u);   // the diffuse interior
   EXPECT_EQ(mv.shape_flags[2] & ~kShapeHasUvs, kShapePlastic);  // the plastic exterior
@@ -165,28 +165,28 @@ TEST(DiffuseSceneTest, DiffuseScenesQualifyAndOthersSayWhyNot) {
   EXPECT_FLOAT_EQ(mv.shape_plastic[2].eta, 1.9f / 1.000277f);
   EXPECT_EQ(mv.shape_plastic[2].specular[0], 1.0f);
   // Its records hold the diffuse base R / (1 - Fdr_int), not R.
-  const DiffuseTriangleRecord& plastic_tri = mv.triangles[mv.shape_first[2]];
+  const VectorTriangleRecord& plastic_tri = mv.triangles[mv.shape_first[2]];
   EXPECT_GT(plastic_tri.albedo[0], 0.940f);
   EXPECT_FLOAT_EQ(plastic_tri.albedo[0] / plastic_tri.albedo[1], 0.940f / 0.271f);
   // Nothing for the kernel to shade: the scalar batch renders it.
   Scene none_desc;
   auto none = load_scene_without_records(&none_desc);
   ASSERT_TRUE(none);
-  EXPECT_EQ(none->diffuse_scene(), nullptr);
-  EXPECT_NE(none->why_not_diffuse().find("no shape is a triangle mesh"), std::string::npos) << none->why_not_diffuse();
+  EXPECT_EQ(none->vector_scene(), nullptr);
+  EXPECT_NE(none->why_not_vector().find("no shape is a triangle mesh"), std::string::npos) << none->why_not_vector();
 
   // What the frame statistics say was left out.
   PathTracerSettings settings;
-  EXPECT_EQ(why_no_diffuse_batch(*none, settings, kPathBatch), none->why_not_diffuse());
-  EXPECT_NE(why_no_diffuse_batch(*cbox->scene, settings, 1).find("1 at a time"), std::string::npos);
-  EXPECT_EQ(why_no_diffuse_batch(*cbox->scene, settings, kPathBatch).empty(), diffuse_batch_available(*cbox->scene));
+  EXPECT_EQ(why_no_vector_batch(*none, settings, kPathBatch), none->why_not_vector());
+  EXPECT_NE(why_no_vector_batch(*cbox->scene, settings, 1).find("1 at a time"), std::string::npos);
+  EXPECT_EQ(why_no_vector_batch(*cbox->scene, settings, kPathBatch).empty(), vector_batch_available(*cbox->scene));
   settings.vector_kernels = false;
-  EXPECT_NE(why_no_diffuse_batch(*cbox->scene, settings, kPathBatch).find("switched off"), std::string::npos);
+  EXPECT_NE(why_no_vector_batch(*cbox->scene, settings, kPathBatch).find("switched off"), std::string::npos);
 }
 
 // The kernels offered are those the CPU can run, fastest first.
-TEST(DiffuseBatchTest, KernelsAreThoseThisCpuRuns) {
-  const std::vector<DiffuseKernel>& kernels = diffuse_kernels();
+TEST(VectorBatchTest, KernelsAreThoseThisCpuRuns) {
+  const std::vector<VectorKernel>& kernels = vector_kernels();
 #if defined(__x86_64__)
   const bool avx2 = __builtin_cpu_supports("avx2");
   const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
@@ -228,12 +228,12 @@ void start_paths(const FrameScene& scene, int w, int h, int n, std::vector<PathS
 // Batches of kPathBatch paths and a partial one, vector (every kernel this CPU
 // runs) against scalar.
 void expect_kernel_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h,
-                                        const DiffuseKernel& kernel);
+                                        const VectorKernel& kernel);
 void expect_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h) {
-  for (const DiffuseKernel& kernel : diffuse_kernels()) expect_kernel_same_as_scalar_batch(scene, v, w, h, kernel);
+  for (const VectorKernel& kernel : vector_kernels()) expect_kernel_same_as_scalar_batch(scene, v, w, h, kernel);
 }
 void expect_kernel_same_as_scalar_batch(const FrameScene& scene, const Variant& v, int w, int h,
-                                        const DiffuseKernel& kernel) {
+                                        const VectorKernel& kernel) {
   PathTracerSettings settings;
   settings.max_depth = v.max_depth;
   settings.rr_depth = v.rr_depth;
@@ -252,8 +252,8 @@ void expect_kernel_same_as_scalar_batch(const FrameScene& scene, const Variant& 
   trace_path_batch(scene, settings, scalar_paths.data(), kPaths, scalar_counters, scalar.data());
   RayStream stream;
   for (int base = 0; base < kPaths; base += kPathBatch)
-    trace_diffuse_batch(scene, settings, vector_paths.data() + base, std::min(kPathBatch, kPaths - base), stream,
-                        vector_counters, vector.data() + base, &kernel);
+    trace_vector_batch(scene, settings, vector_paths.data() + base, std::min(kPathBatch, kPaths - base), stream,
+                       vector_counters, vector.data() + base, &kernel);
   int nonzero = 0, differ = 0;
   for (int i = 0; i < kPaths; ++i) {
     const bool same = same_bits(scalar[size_t(i)].radiance, vector[size_t(i)].radiance) &&
@@ -283,13 +283,13 @@ const Variant kVariants[] = {
 void expect_bundled_scene_same_as_scalar_batch(const std::string& name) {
   auto ts = load_test_scene(name, kW, kH);
   ASSERT_TRUE(ts);
-  if (!diffuse_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  if (!vector_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*ts->scene, v, kW, kH);
 }
 
-TEST(DiffuseBatchTest, CboxPathsMatchTheScalarBatchBitForBit) { expect_bundled_scene_same_as_scalar_batch("cbox"); }
+TEST(VectorBatchTest, CboxPathsMatchTheScalarBatchBitForBit) { expect_bundled_scene_same_as_scalar_batch("cbox"); }
 
-TEST(DiffuseBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
+TEST(VectorBatchTest, VeachMisPathsMatchTheScalarBatchBitForBit) {
   expect_bundled_scene_same_as_scalar_batch("veach-mis");
 }
 
@@ -368,31 +368,31 @@ std::unique_ptr<FrameScene> load_glossy_room(Scene* desc, bool animated = false)
 
 // An animated conductor panel and sphere light: the records follow them
 // through FrameScene::update (the sphere's centre moves in its record).
-TEST(DiffuseBatchTest, AnimatedGlossyRoomMatchesTheScalarBatchAfterUpdates) {
+TEST(VectorBatchTest, AnimatedGlossyRoomMatchesTheScalarBatchAfterUpdates) {
   Scene desc;
   auto room = load_glossy_room(&desc, /*animated=*/true);
   ASSERT_TRUE(room);
-  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
-  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  ASSERT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
+  if (!vector_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   expect_same_as_scalar_batch(*room, kVariants[2], kW, kH);
-  const float x0 = room->diffuse_scene()->view().emitter_spheres[0].center[0];
+  const float x0 = room->vector_scene()->view().emitter_spheres[0].center[0];
   Scene moved = desc;
   moved.shapes[kSphereLight].to_world = Transform::translate({-0.3f, -0.1f, 0.1f}) * desc.shapes[kSphereLight].to_world;
   moved.shapes[kGlossyPanel].to_world =
       Transform::translate({0.1f, 0.1f, -0.1f}) * Transform::rotate({0, 1, 0}, 25.0f) * desc.shapes[kGlossyPanel].to_world;
   ASSERT_TRUE(room->update(moved).ok());
-  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
-  EXPECT_FLOAT_EQ(room->diffuse_scene()->view().emitter_spheres[0].center[0], x0 - 0.3f);
+  ASSERT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
+  EXPECT_FLOAT_EQ(room->vector_scene()->view().emitter_spheres[0].center[0], x0 - 0.3f);
   expect_same_as_scalar_batch(*room, kVariants[2], kW, kH);
   expect_same_as_scalar_batch(*room, kVariants[0], kW, kH);
 }
 
-TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
+TEST(VectorBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
   Scene desc;
   auto room = load_glossy_room(&desc);
   ASSERT_TRUE(room);
-  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
-  const DiffuseSceneView& view = room->diffuse_scene()->view();
+  ASSERT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
+  const VectorSceneView& view = room->vector_scene()->view();
   EXPECT_EQ(view.emitter_triangles, nullptr);
   for (size_t i : {1, 2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapeConductor, 0u) << "shape " << i;
   EXPECT_NE(view.shape_flags[5] & kShapePlastic, 0u);
@@ -401,14 +401,14 @@ TEST(DiffuseBatchTest, GlossyRoomPathsMatchTheScalarBatchBitForBit) {
   EXPECT_EQ(view.emitter_spheres[1].flip, -1.0f);
   EXPECT_EQ(view.shape_conductor[4].alpha_u, 0.6f);
   EXPECT_EQ(view.shape_conductor[3].alpha_u, 1e-4f);  // MicrofacetDistribution's floor
-  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  if (!vector_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
 // Meshes and a sphere that reflect nothing (kShapeReflectsNothing): a black
 // rectangle light, a black cube and a black sphere end the paths that reach
 // them, after the light's emission.
-TEST(DiffuseBatchTest, ShapesThatReflectNothingEndPathsAsTheScalarBatchDoes) {
+TEST(VectorBatchTest, ShapesThatReflectNothingEndPathsAsTheScalarBatchDoes) {
   Scene desc;
   auto room = load_xml_scene(R"(<scene version="3.0.0">)" + std::string(kRoomCamera) + R"(
   <shape type="cube"><boolean name="flip_normals" value="true"/>
@@ -429,27 +429,27 @@ TEST(DiffuseBatchTest, ShapesThatReflectNothingEndPathsAsTheScalarBatchDoes) {
     <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf></shape>
 </scene>)", std::filesystem::temp_directory_path().string(), &desc, {});
   ASSERT_TRUE(room);
-  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
-  const DiffuseSceneView& view = room->diffuse_scene()->view();
+  ASSERT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
+  const VectorSceneView& view = room->vector_scene()->view();
   EXPECT_EQ(view.shape_flags[0] & kShapeReflectsNothing, 0u);
   EXPECT_EQ(view.shape_flags[1] & kShapeReflectsNothing, 0u);
   for (size_t i : {2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapeReflectsNothing, 0u) << "shape " << i;
   EXPECT_NE(view.shape_flags[4] & kShapeScalar, 0u);
-  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  if (!vector_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
 // matpreview: an environment map seen along rays that leave (and at last
 // rays) and sampled, both by the kernel; a checkerboard floor; the plastic
 // shape, shaded by the kernel.
-TEST(DiffuseBatchTest, MatpreviewPathsMatchTheScalarBatchBitForBit) {
+TEST(VectorBatchTest, MatpreviewPathsMatchTheScalarBatchBitForBit) {
   expect_bundled_scene_same_as_scalar_batch("matpreview");
 }
 
 // An open yard under a constant sky: a diffuse floor, a rough conductor
 // panel, a plastic cube, a black rectangle light and a black sphere that
 // reflect nothing (the path ends there).
-TEST(DiffuseBatchTest, OpenYardUnderConstantSkyMatchesTheScalarBatchBitForBit) {
+TEST(VectorBatchTest, OpenYardUnderConstantSkyMatchesTheScalarBatchBitForBit) {
   Scene desc;
   auto yard = load_xml_scene(R"(<scene version="3.0.0">
   <sensor type="perspective">
@@ -476,11 +476,11 @@ TEST(DiffuseBatchTest, OpenYardUnderConstantSkyMatchesTheScalarBatchBitForBit) {
   <emitter type="constant"><rgb name="radiance" value="0.8, 0.9, 1.2"/></emitter>
 </scene>)", std::filesystem::temp_directory_path().string(), &desc, {});
   ASSERT_TRUE(yard);
-  ASSERT_NE(yard->diffuse_scene(), nullptr) << yard->why_not_diffuse();
-  const DiffuseSceneView& view = yard->diffuse_scene()->view();
+  ASSERT_NE(yard->vector_scene(), nullptr) << yard->why_not_vector();
+  const VectorSceneView& view = yard->vector_scene()->view();
   EXPECT_EQ(view.shape_flags[3] & ~kShapeHasUvs, kShapeReflectsNothing);  // the rectangle light
   EXPECT_EQ(view.shape_flags[4], kShapeScalar | kShapeReflectsNothing);  // the black sphere
-  if (!diffuse_batch_available(*yard)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  if (!vector_batch_available(*yard)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*yard, v, kW, kH);
 }
 
@@ -489,7 +489,7 @@ TEST(DiffuseBatchTest, OpenYardUnderConstantSkyMatchesTheScalarBatchBitForBit) {
 // specular reflectance, an index-matched coating (eta 1: no Fresnel
 // reflection, never the Dirac lobe), a coating denser outside than in
 // (eta < 1), and a textured one that the scalar stages shade.
-TEST(DiffuseBatchTest, PlasticRoomMatchesTheScalarBatchBitForBit) {
+TEST(VectorBatchTest, PlasticRoomMatchesTheScalarBatchBitForBit) {
   Scene desc;
   auto room = load_xml_scene(R"(<scene version="3.0.0">)" + std::string(kRoomCamera) + R"(
   <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><translate y="-1"/></transform>
@@ -516,33 +516,33 @@ TEST(DiffuseBatchTest, PlasticRoomMatchesTheScalarBatchBitForBit) {
   <emitter type="constant"><rgb name="radiance" value="0.4, 0.5, 0.7"/></emitter>
 </scene>)", std::filesystem::temp_directory_path().string(), &desc, {});
   ASSERT_TRUE(room);
-  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
-  const DiffuseSceneView& view = room->diffuse_scene()->view();
+  ASSERT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
+  const VectorSceneView& view = room->vector_scene()->view();
   for (size_t i : {0, 1, 2, 3, 4}) EXPECT_NE(view.shape_flags[i] & kShapePlastic, 0u) << "shape " << i;
   EXPECT_NE(view.shape_flags[1] & kShapeTwoSided, 0u);
   EXPECT_EQ(view.shape_flags[5], kShapeScalar);  // the textured plastic
   EXPECT_EQ(view.shape_plastic[3].eta, 1.0f);
   EXPECT_LT(view.shape_plastic[4].eta, 1.0f);
   EXPECT_EQ(view.shape_plastic[2].specular[2], 0.2f);
-  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  if (!vector_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
-TEST(DiffuseBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
+TEST(VectorBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
   Scene desc;
   auto room = load_room(&desc);
   ASSERT_TRUE(room);
-  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  if (!vector_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   for (const Variant& v : kVariants) expect_same_as_scalar_batch(*room, v, kW, kH);
 }
 
-// A caller that skips diffuse_batch_available() still gets the scalar
+// A caller that skips vector_batch_available() still gets the scalar
 // batch's paths, not a crash, on a scene without records.
-TEST(DiffuseBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
+TEST(VectorBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
   Scene desc;
   auto scene = load_scene_without_records(&desc);
   ASSERT_TRUE(scene);
-  ASSERT_EQ(scene->diffuse_scene(), nullptr);
+  ASSERT_EQ(scene->vector_scene(), nullptr);
   std::vector<PathState> scalar_paths, vector_paths;
   start_paths(*scene, 8, 8, kPathBatch, &scalar_paths);
   start_paths(*scene, 8, 8, kPathBatch, &vector_paths);
@@ -551,7 +551,7 @@ TEST(DiffuseBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
   PathTracerSettings settings;
   trace_path_batch(*scene, settings, scalar_paths.data(), kPathBatch, scalar_counters, scalar.data());
   RayStream stream;
-  trace_diffuse_batch(*scene, settings, vector_paths.data(), kPathBatch, stream, vector_counters, vector.data());
+  trace_vector_batch(*scene, settings, vector_paths.data(), kPathBatch, stream, vector_counters, vector.data());
   int lit = 0;
   for (int i = 0; i < kPathBatch; ++i) {
     EXPECT_TRUE(same_bits(scalar[size_t(i)].radiance, vector[size_t(i)].radiance)) << "path " << i;
@@ -564,19 +564,19 @@ TEST(DiffuseBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
 // Animated shapes are baked into the records at each frame's place: before
 // and after FrameScene::update moves them, the kernel's paths are the scalar
 // batch's.
-TEST(DiffuseBatchTest, AnimatedShapesMatchTheScalarBatchAfterUpdates) {
+TEST(VectorBatchTest, AnimatedShapesMatchTheScalarBatchAfterUpdates) {
   Scene desc;
   auto room = load_room(&desc, /*animated=*/true);
   ASSERT_TRUE(room);
-  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
-  if (!diffuse_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  ASSERT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
+  if (!vector_batch_available(*room)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   expect_same_as_scalar_batch(*room, kVariants[1], kW, kH);
   Scene moved = desc;
   moved.shapes[kRedPanel].to_world =
       Transform::translate({-0.2f, 0.3f, 0.1f}) * Transform::rotate({0, 1, 0}, 40.0f) * desc.shapes[kRedPanel].to_world;
   moved.shapes[kFan].to_world = Transform::translate({0.1f, -0.05f, 0.2f}) * desc.shapes[kFan].to_world;
   ASSERT_TRUE(room->update(moved).ok());
-  ASSERT_NE(room->diffuse_scene(), nullptr) << room->why_not_diffuse();
+  ASSERT_NE(room->vector_scene(), nullptr) << room->why_not_vector();
   expect_same_as_scalar_batch(*room, kVariants[1], kW, kH);
   expect_same_as_scalar_batch(*room, kVariants[2], kW, kH);
   // A mirroring transform: interaction() now interpolates the panel's vertex
@@ -584,9 +584,9 @@ TEST(DiffuseBatchTest, AnimatedShapesMatchTheScalarBatchAfterUpdates) {
   // do for animated shapes, so the records go and the scalar batch renders.
   moved.shapes[kRedPanel].to_world = Transform::scale({-1.0f, 1.0f, 1.0f}) * moved.shapes[kRedPanel].to_world;
   ASSERT_TRUE(room->update(moved).ok());
-  EXPECT_EQ(room->diffuse_scene(), nullptr);
-  EXPECT_NE(room->why_not_diffuse().find("animated shape 4"), std::string::npos) << room->why_not_diffuse();
-  EXPECT_FALSE(diffuse_batch_available(*room));
+  EXPECT_EQ(room->vector_scene(), nullptr);
+  EXPECT_NE(room->why_not_vector().find("animated shape 4"), std::string::npos) << room->why_not_vector();
+  EXPECT_FALSE(vector_batch_available(*room));
 }
 
 // The whole renderer: an image with the vector kernel is the scalar one's,
@@ -595,15 +595,15 @@ TEST(DiffuseBatchTest, AnimatedShapesMatchTheScalarBatchAfterUpdates) {
 // starts paths inside a closed mesh; matpreview has an environment map; in
 // glass.xml and tir.xml paths cross dielectrics on the scalar stages and
 // carry eta into the kernel's Russian roulette).
-class DiffuseRenderTest : public ::testing::TestWithParam<std::string> {};
+class VectorRenderTest : public ::testing::TestWithParam<std::string> {};
 
-TEST_P(DiffuseRenderTest, RenderIsTheSameWithAndWithoutTheVectorKernel) {
+TEST_P(VectorRenderTest, RenderIsTheSameWithAndWithoutTheVectorKernel) {
   auto desc = load_mitsuba_scene(std::string(GDVR_SOURCE_DIR) + "/scenes/" + GetParam(), LoadOptions{});
   ASSERT_TRUE(desc.ok()) << desc.status().to_string();
   auto scene = FrameScene::create(desc.value(), {});
   ASSERT_TRUE(scene.ok()) << scene.status().to_string();
-  ASSERT_NE(scene.value()->diffuse_scene(), nullptr) << scene.value()->why_not_diffuse();
-  if (!diffuse_batch_available(*scene.value())) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  ASSERT_NE(scene.value()->vector_scene(), nullptr) << scene.value()->why_not_vector();
+  if (!vector_batch_available(*scene.value())) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
   FrameRenderSettings rs;
   rs.width = 40;
   rs.height = 30;
@@ -629,7 +629,7 @@ TEST_P(DiffuseRenderTest, RenderIsTheSameWithAndWithoutTheVectorKernel) {
                            results[0].variance.data().size() * sizeof(float)));
 }
 
-INSTANTIATE_TEST_SUITE_P(Scenes, DiffuseRenderTest,
+INSTANTIATE_TEST_SUITE_P(Scenes, VectorRenderTest,
                          ::testing::Values("cbox/cbox-rgb.xml", "cornell-box/scene.xml", "veach-mis/scene.xml",
                                            "stiff/degenerate.xml", "stiff/furnace.xml", "stiff/inside_object.xml",
                                            "stiff/rough_conductor.xml", "stiff/tiny_light.xml", "stiff/scaled.xml",

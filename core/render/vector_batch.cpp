@@ -1,4 +1,4 @@
-#include "core/render/diffuse_batch.h"
+#include "core/render/vector_batch.h"
 
 #include "core/render/path_batch.h"
 
@@ -7,20 +7,20 @@
 namespace gdvr {
 namespace {
 
-static_assert(kDiffuseBatch == kPathBatch, "the diffuse batch takes the path batch's paths");
+static_assert(kVectorBatch == kPathBatch, "the vector batch takes the path batch's paths");
 
-Vec3f lane3(const float (*a)[kDiffuseBatch], int i) { return {a[0][i], a[1][i], a[2][i]}; }
-Rgb lane_rgb(const float (*a)[kDiffuseBatch], int i) { return {a[0][i], a[1][i], a[2][i]}; }
-void set_lane(float (*a)[kDiffuseBatch], int i, Vec3f v) { a[0][i] = v.x, a[1][i] = v.y, a[2][i] = v.z; }
-void set_lane(float (*a)[kDiffuseBatch], int i, Rgb c) { a[0][i] = c.r, a[1][i] = c.g, a[2][i] = c.b; }
+Vec3f lane3(const float (*a)[kVectorBatch], int i) { return {a[0][i], a[1][i], a[2][i]}; }
+Rgb lane_rgb(const float (*a)[kVectorBatch], int i) { return {a[0][i], a[1][i], a[2][i]}; }
+void set_lane(float (*a)[kVectorBatch], int i, Vec3f v) { a[0][i] = v.x, a[1][i] = v.y, a[2][i] = v.z; }
+void set_lane(float (*a)[kVectorBatch], int i, Rgb c) { a[0][i] = c.r, a[1][i] = c.g, a[2][i] = c.b; }
 
-Ray ray_of(const DiffuseBatchState& s, int i) { return {lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]}; }
-Ray shadow_ray_of(const DiffuseBatchState& s, int i) {
+Ray ray_of(const VectorBatchState& s, int i) { return {lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]}; }
+Ray shadow_ray_of(const VectorBatchState& s, int i) {
   return {lane3(s.shadow_o, i), lane3(s.shadow_d, i), 0.0f, s.shadow_tmax[i]};
 }
 
 // A path's state between vertices into lane i, field by field (store_path's inverse).
-void load_path(const PathState& st, int i, DiffuseBatchState* s) {
+void load_path(const PathState& st, int i, VectorBatchState* s) {
   s->rng_state[i] = st.sampler.generator().state();
   s->rng_inc[i] = st.sampler.generator().increment();
   set_lane(s->o, i, st.ray.o);
@@ -38,7 +38,7 @@ void load_path(const PathState& st, int i, DiffuseBatchState* s) {
 }
 
 // Lane i's whole state back into its PathState, for the scalar stages.
-void store_path(const DiffuseBatchState& s, int i, PathState* st) {
+void store_path(const VectorBatchState& s, int i, PathState* st) {
   st->sampler.generator().restore(s.rng_state[i], s.rng_inc[i]);
   st->ray = ray_of(s, i);
   st->throughput = lane_rgb(s.throughput, i);
@@ -68,7 +68,7 @@ void log_lanes(const int* which, int n, bool shadow, GeometrySet set, RayCoheren
 // scene (null: the environment's radiance): through a PathState, so that the
 // sums come out as the scalar stage leaves them. Scalar: a few per cent of
 // hits, and it needs the emitter's own pdf.
-void add_emission_on_lane(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* s, int i,
+void add_emission_on_lane(const FrameScene& scene, const PathTracerSettings& settings, VectorBatchState* s, int i,
                           const RayHit* hit, PathState* scratch) {
   scratch->ray = ray_of(*s, i);
   scratch->hit = hit != nullptr;
@@ -90,7 +90,7 @@ void add_emission_on_lane(const FrameScene& scene, const PathTracerSettings& set
 // a BSDF it lacks: kShapeScalar), by the scalar stages through a PathState,
 // in path_batch.cpp's order: emission, the emitter sample and its BSDF
 // value, the BSDF sample and Russian roulette.
-void shade_vertex_on_lane(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* s, int i,
+void shade_vertex_on_lane(const FrameScene& scene, const PathTracerSettings& settings, VectorBatchState* s, int i,
                           const RayHit& hit, PathState* st) {
   store_path(*s, i, st);
   st->hit = true;
@@ -116,8 +116,8 @@ void shade_vertex_on_lane(const FrameScene& scene, const PathTracerSettings& set
 
 // add_emission() for lanes[0..n), whose rays left the scene: by the kernel
 // where the environment is a map, else lane by lane.
-void add_environment(const FrameScene& scene, const PathTracerSettings& settings, const DiffuseSceneView& view,
-                     const DiffuseKernel& kernel, DiffuseBatchState* s, const int32_t* lanes, int n,
+void add_environment(const FrameScene& scene, const PathTracerSettings& settings, const VectorSceneView& view,
+                     const VectorKernel& kernel, VectorBatchState* s, const int32_t* lanes, int n,
                      PathState* scratch) {
   if (n == 0 || !scene.has_environment()) return;
   if (view.envmap) {
@@ -131,8 +131,8 @@ void add_environment(const FrameScene& scene, const PathTracerSettings& settings
 // are their paths' last under max_depth: the emitters-only query, the any-hit
 // query before the emitter (or, for a ray that found none, towards the
 // environment) and the emission of those that see it.
-void cast_last_rays(const FrameScene& scene, const PathTracerSettings& settings, const DiffuseSceneView& view,
-                    const DiffuseKernel& kernel, DiffuseBatchState* s, const int* live, int count,
+void cast_last_rays(const FrameScene& scene, const PathTracerSettings& settings, const VectorSceneView& view,
+                    const VectorKernel& kernel, VectorBatchState* s, const int* live, int count,
                     RayCoherence coherence, RayStream& stream, PathCounters& counters, PathState* scratch) {
   log_lanes(live, count, false, GeometrySet::kEmitters, coherence, counters, [s](int i) { return ray_of(*s, i); });
   for (int k = 0; k < count; ++k) {
@@ -183,7 +183,7 @@ void cast_last_rays(const FrameScene& scene, const PathTracerSettings& settings,
 }
 
 // Exchanges every per-lane field of lanes a and b.
-void swap_lanes(DiffuseBatchState& s, int a, int b) {
+void swap_lanes(VectorBatchState& s, int a, int b) {
   auto sw = [a, b](auto* field) { std::swap(field[a], field[b]); };
   sw(s.rng_state), sw(s.rng_inc);
   for (int c = 0; c < 3; ++c) {
@@ -197,10 +197,10 @@ void swap_lanes(DiffuseBatchState& s, int a, int b) {
 
 // Lane `from`, which the kernel shades next, into lane `to`, whose path has
 // ended (now or before): what the kernel reads of a lane (its inputs in
-// diffuse_batch_state.h) goes to `to`, and the two lanes trade their sums,
+// vector_batch_state.h) goes to `to`, and the two lanes trade their sums,
 // which are all that is left of an ended path. Cheaper than swap_lanes by
 // half the fields, which mattered (1.010x on matpreview, 24 pairs).
-void move_shaded_lane(DiffuseBatchState& s, int from, int to) {
+void move_shaded_lane(VectorBatchState& s, int from, int to) {
   s.rng_state[to] = s.rng_state[from], s.rng_inc[to] = s.rng_inc[from];
   for (int c = 0; c < 3; ++c) {
     s.d[c][to] = s.d[c][from];
@@ -223,7 +223,7 @@ void move_shaded_lane(DiffuseBatchState& s, int from, int to) {
 // live[0..count) (the lanes traced this round, whose order, the streams'
 // order, stays as it was). A lane the scalar stages shaded this round
 // (scalar_shaded) is whole and live, so it trades all its fields.
-void pack_shaded_lanes(DiffuseBatchState& s, int n, int32_t* scalar_shaded, int* origin, int* live, int count) {
+void pack_shaded_lanes(VectorBatchState& s, int n, int32_t* scalar_shaded, int* origin, int* live, int count) {
   int slot_of[kPathBatch];  // lane -> its place in live, or -1
   for (int i = 0; i < n; ++i) slot_of[i] = -1;
   for (int k = 0; k < count; ++k) slot_of[live[k]] = k;
@@ -245,33 +245,33 @@ void pack_shaded_lanes(DiffuseBatchState& s, int n, int32_t* scalar_shaded, int*
 
 }  // namespace
 
-const std::vector<DiffuseKernel>& diffuse_kernels() {
-  static const std::vector<DiffuseKernel> kernels = [] {
-    std::vector<DiffuseKernel> k;
+const std::vector<VectorKernel>& vector_kernels() {
+  static const std::vector<VectorKernel> kernels = [] {
+    std::vector<VectorKernel> k;
 #if defined(GDVR_AVX2_KERNELS)
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
         __builtin_cpu_supports("avx512dq"))
-      k.push_back({"avx512", shade_diffuse_vertices_avx512, add_environment_avx512});
-    if (__builtin_cpu_supports("avx2")) k.push_back({"avx2", shade_diffuse_vertices_avx2, add_environment_avx2});
+      k.push_back({"avx512", shade_vector_vertices_avx512, add_environment_avx512});
+    if (__builtin_cpu_supports("avx2")) k.push_back({"avx2", shade_vector_vertices_avx2, add_environment_avx2});
 #endif
     return k;
   }();
   return kernels;
 }
 
-bool diffuse_batch_available(const FrameScene& scene) {
-  return !diffuse_kernels().empty() && scene.diffuse_scene() != nullptr;
+bool vector_batch_available(const FrameScene& scene) {
+  return !vector_kernels().empty() && scene.vector_scene() != nullptr;
 }
 
-std::string why_no_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, int paths_in_flight) {
+std::string why_no_vector_batch(const FrameScene& scene, const PathTracerSettings& settings, int paths_in_flight) {
   if (!settings.vector_kernels) return "vector kernels are switched off";
   if (paths_in_flight < kPathBatch) return "paths are traced " + std::to_string(paths_in_flight) + " at a time";
-  if (!scene.diffuse_scene()) return scene.why_not_diffuse();
-  if (diffuse_kernels().empty()) return "this CPU has no AVX2";
+  if (!scene.vector_scene()) return scene.why_not_vector();
+  if (vector_kernels().empty()) return "this CPU has no AVX2";
   return "";
 }
 
-void start_lane(DiffuseBatchState* s, int i, const Ray& camera_ray, const Sampler& sampler) {
+void start_lane(VectorBatchState* s, int i, const Ray& camera_ray, const Sampler& sampler) {
   s->rng_state[i] = sampler.generator().state();
   s->rng_inc[i] = sampler.generator().increment();
   set_lane(s->o, i, camera_ray.o);
@@ -288,26 +288,26 @@ void start_lane(DiffuseBatchState* s, int i, const Ray& camera_ray, const Sample
   s->depth[i] = 0;
 }
 
-void trace_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
-                         RayStream& stream, PathCounters& counters, PathSample* out, const DiffuseKernel* kernel) {
-  if (!scene.diffuse_scene() || (!kernel && diffuse_kernels().empty())) {
-    // Callers check diffuse_batch_available(); this keeps a careless one correct.
+void trace_vector_batch(const FrameScene& scene, const PathTracerSettings& settings, PathState* paths, int n,
+                        RayStream& stream, PathCounters& counters, PathSample* out, const VectorKernel* kernel) {
+  if (!scene.vector_scene() || (!kernel && vector_kernels().empty())) {
+    // Callers check vector_batch_available(); this keeps a careless one correct.
     trace_path_batch(scene, settings, paths, n, counters, out);
     return;
   }
-  DiffuseBatchState s;
+  VectorBatchState s;
   for (int i = 0; i < n; ++i) load_path(paths[i], i, &s);
-  trace_started_diffuse_batch(scene, settings, &s, n, stream, counters, out, kernel);
+  trace_started_vector_batch(scene, settings, &s, n, stream, counters, out, kernel);
 }
 
-void trace_started_diffuse_batch(const FrameScene& scene, const PathTracerSettings& settings, DiffuseBatchState* state,
-                                 int n, RayStream& stream, PathCounters& counters, PathSample* out,
-                                 const DiffuseKernel* kernel) {
-  if (!kernel) kernel = &diffuse_kernels().front();
-  DiffuseSceneView view = scene.diffuse_scene()->view();
+void trace_started_vector_batch(const FrameScene& scene, const PathTracerSettings& settings, VectorBatchState* state,
+                                int n, RayStream& stream, PathCounters& counters, PathSample* out,
+                                const VectorKernel* kernel) {
+  if (!kernel) kernel = &vector_kernels().front();
+  VectorSceneView view = scene.vector_scene()->view();
   view.rr_depth = settings.rr_depth;
-  DiffuseBatchState& s = *state;
-  for (int i = 0; i < kDiffuseBatch; ++i) s.shade[i] = s.continues[i] = s.shadow_pending[i] = 0;
+  VectorBatchState& s = *state;
+  for (int i = 0; i < kVectorBatch; ++i) s.shade[i] = s.continues[i] = s.shadow_pending[i] = 0;
   int live[kPathBatch], shadowed[kPathBatch];
   int32_t scalar_shaded[kPathBatch] = {};  // -1 where shade_vertex_on_lane shaded the vertex
   int count = n;

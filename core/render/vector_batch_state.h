@@ -1,9 +1,9 @@
-// What the vector kernel of the diffuse path batch (diffuse_batch.h) reads
+// What the vector kernel of the vector path batch (vector_batch.h) reads
 // and writes: the scene as one 64-byte record per triangle, and a batch of
 // paths as struct of arrays (one array per field, a lane per path), so that
 // eight paths' fields load as one AVX2 vector.
 //
-// Plain data only. The kernel (diffuse_vertex_kernel.inl) is compiled for
+// Plain data only. The kernel (vector_vertex_kernel.inl) is compiled for
 // AVX2 and for AVX-512 and runs only where the CPU has them; an inline
 // function it shared with the rest of gdvr could be emitted in such a form
 // and picked by the linker for callers on any CPU. So nothing here has code,
@@ -17,14 +17,14 @@ namespace gdvr {
 class Distribution1D;
 struct Texture;
 
-// Paths in a diffuse batch (== kPathBatch: path_batch.cpp hands its batches over).
-constexpr int kDiffuseBatch = 256;
+// Paths in a vector batch (== kPathBatch: path_batch.cpp hands its batches over).
+constexpr int kVectorBatch = 256;
 
-// A triangle of a mesh with a diffuse BSDF, in world space at this frame:
+// A triangle of a mesh whose BSDF the kernel shades, in world space at this frame:
 // what a vertex on it reads, in one cache line (with gathers of indices,
 // corners, normal, offset floor and reflectance field by field, AVX2 gained
 // a fifth less: docs/experiments/README.md).
-struct alignas(64) DiffuseTriangleRecord {
+struct alignas(64) VectorTriangleRecord {
   float p0[3], p1[3], p2[3];  // world-space corners
   float n[3];                 // unit face normal, flip_normals applied
   float albedo[3];            // the diffuse reflectance where it is constant
@@ -33,9 +33,9 @@ struct alignas(64) DiffuseTriangleRecord {
   // rather than with its face normal.
   float offset_floor;
 };
-static_assert(sizeof(DiffuseTriangleRecord) == 64);
+static_assert(sizeof(VectorTriangleRecord) == 64);
 
-// What a triangle needs beyond its DiffuseTriangleRecord where it shades
+// What a triangle needs beyond its VectorTriangleRecord where it shades
 // with interpolated vertex normals or a textured reflectance, at the same
 // index: the vertex normals (world space, before flip_normals) and uvs.
 struct alignas(64) ShadingRecord {
@@ -54,7 +54,7 @@ struct alignas(64) EmitterTriangleRecord {
 };
 static_assert(sizeof(EmitterTriangleRecord) == 64);
 
-// DiffuseSceneView::shape_flags: what a shape's hits need beyond its records.
+// VectorSceneView::shape_flags: what a shape's hits need beyond its records.
 constexpr uint32_t kShapeTwoSided = 1;  // its BSDF is two-sided
 constexpr uint32_t kShapeTextured = 2;  // its reflectance is a texture (ShadingRecord has the uvs)
 constexpr uint32_t kShapeHasUvs = 4;    // its mesh has uvs (else the barycentrics are the uv, as in interaction())
@@ -62,7 +62,7 @@ constexpr uint32_t kShapeHasUvs = 4;    // its mesh has uvs (else the barycentri
 // (ConductorRecord), not a diffuse one.
 constexpr uint32_t kShapeConductor = 8;
 // The kernel does not shade its hits (a sphere, another BSDF): the driver
-// runs the scalar stages for them (diffuse_batch.cpp), and it has no records.
+// runs the scalar stages for them (vector_batch.cpp), and it has no records.
 constexpr uint32_t kShapeScalar = 16;
 // Its BSDF reflects nothing (a diffuse one of constant reflectance 0, as
 // veach-mis's sphere lights have): a path that hits it takes the emission
@@ -118,7 +118,7 @@ struct alignas(64) SphereEmitterRecord {
 static_assert(sizeof(SphereEmitterRecord) == 64);
 
 // A slot of an alias table as core/math/alias_table.h lays it out
-// (AliasSlot; diffuse_scene.cpp checks that the two agree).
+// (AliasSlot; vector_scene.cpp checks that the two agree).
 struct AliasSlotRecord {
   float q;
   uint32_t alias;
@@ -135,7 +135,7 @@ struct EnvmapRecord {
   const float* texels;  // `channels` floats per texel, rows of image_width
   int image_width, image_height, channels;
   double to_world[3][3];  // Transform::vector's rows
-  double to_local[3][3];  // the inverse's (FrameScene::Envmap::to_local)
+  double to_local[3][3];  // the inverse's (EnvmapTables::to_local)
   float scale;
   uint32_t emitter;  // its index among the scene's emitters
 };
@@ -153,9 +153,9 @@ struct EmitterSampleLane {
 using SampleEmitterFn = void (*)(const void* scene, const float p[3], float u_select, float ux, float uy,
                                  EmitterSampleLane* out);
 
-// The scene as the kernel sees it (pointers into DiffuseScene's arrays).
-struct DiffuseSceneView {
-  const DiffuseTriangleRecord* triangles = nullptr;
+// The scene as the kernel sees it (pointers into VectorScene's arrays).
+struct VectorSceneView {
+  const VectorTriangleRecord* triangles = nullptr;
   // Null when every triangle is flat and untextured.
   const ShadingRecord* shading = nullptr;
   const uint32_t* shape_first = nullptr;      // shape id -> its first record
@@ -189,55 +189,55 @@ struct DiffuseSceneView {
   int rr_depth = 0;
 };
 
-// kDiffuseBatch paths, field by field. The driver fills the ray, the hit and
+// kVectorBatch paths, field by field. The driver fills the ray, the hit and
 // `shade`; the kernel shades the lanes marked in `shade` and leaves the
 // others as they were. What it makes of a lane it shades depends on that
 // lane's rng_state, rng_inc, d, throughput, eta, depth and hit alone (other
 // fields it overwrites, or, like result and direct, leaves alone).
-// move_shaded_lane (diffuse_batch.cpp), which packs the shaded lanes
+// move_shaded_lane (vector_batch.cpp), which packs the shaded lanes
 // together before each pass, moves exactly those, so a new input of the
-// kernel's goes there too (DiffuseBatchTest catches a missing one as lanes
+// kernel's goes there too (VectorBatchTest catches a missing one as lanes
 // that differ from the scalar stages).
-struct alignas(64) DiffuseBatchState {
-  uint64_t rng_state[kDiffuseBatch], rng_inc[kDiffuseBatch];  // the path's Pcg32
-  alignas(64) float o[3][kDiffuseBatch], d[3][kDiffuseBatch];   // the ray traced next
-  alignas(64) float tmin[kDiffuseBatch], tmax[kDiffuseBatch];
-  alignas(64) float throughput[3][kDiffuseBatch], result[3][kDiffuseBatch], direct[3][kDiffuseBatch];
-  alignas(64) float prev_p[3][kDiffuseBatch], prev_pdf[kDiffuseBatch];
+struct alignas(64) VectorBatchState {
+  uint64_t rng_state[kVectorBatch], rng_inc[kVectorBatch];  // the path's Pcg32
+  alignas(64) float o[3][kVectorBatch], d[3][kVectorBatch];   // the ray traced next
+  alignas(64) float tmin[kVectorBatch], tmax[kVectorBatch];
+  alignas(64) float throughput[3][kVectorBatch], result[3][kVectorBatch], direct[3][kVectorBatch];
+  alignas(64) float prev_p[3][kVectorBatch], prev_pdf[kVectorBatch];
   // The relative index of refraction along the path (PathState::eta), for
   // Russian roulette: a lane that went through glass on the scalar stages
   // carries it into the kernel's vertices, which leave it as it is.
-  alignas(64) float eta[kDiffuseBatch];
-  alignas(64) int32_t prev_delta[kDiffuseBatch], depth[kDiffuseBatch];
+  alignas(64) float eta[kVectorBatch];
+  alignas(64) int32_t prev_delta[kVectorBatch], depth[kVectorBatch];
   // The closest hit of the ray (shape id, triangle, barycentrics).
-  alignas(64) int32_t hit_shape[kDiffuseBatch], hit_prim[kDiffuseBatch];
-  alignas(64) float hit_u[kDiffuseBatch], hit_v[kDiffuseBatch];
-  alignas(64) int32_t shade[kDiffuseBatch];      // in: -1 shades this lane's vertex, 0 leaves it
-  alignas(64) int32_t continues[kDiffuseBatch];  // out: -1 where the path has a next ray
+  alignas(64) int32_t hit_shape[kVectorBatch], hit_prim[kVectorBatch];
+  alignas(64) float hit_u[kVectorBatch], hit_v[kVectorBatch];
+  alignas(64) int32_t shade[kVectorBatch];      // in: -1 shades this lane's vertex, 0 leaves it
+  alignas(64) int32_t continues[kVectorBatch];  // out: -1 where the path has a next ray
   // Out: next-event estimation waiting for its shadow ray.
-  alignas(64) float shadow_o[3][kDiffuseBatch], shadow_d[3][kDiffuseBatch], shadow_tmax[kDiffuseBatch];
-  alignas(64) float shadow_contribution[3][kDiffuseBatch];
-  alignas(64) int32_t shadow_pending[kDiffuseBatch];  // -1 or 0
+  alignas(64) float shadow_o[3][kVectorBatch], shadow_d[3][kVectorBatch], shadow_tmax[kVectorBatch];
+  alignas(64) float shadow_contribution[3][kVectorBatch];
+  alignas(64) int32_t shadow_pending[kVectorBatch];  // -1 or 0
 };
 
-// One vertex for every lane marked in state->shade (a diffuse or rough
-// conductor triangle): the hit's shading, next-event estimation, the
+// One vertex for every lane marked in state->shade (a diffuse, rough
+// conductor or smooth plastic triangle): the hit's shading, next-event estimation, the
 // BSDF's bounce and Russian roulette, with path_stages.h's arithmetic in
 // its order, so every lane comes out bit for bit as sample_emitter,
 // connect_emitter and sample_bsdf leave a PathState. One entry point per
-// instruction set (diffuse_vertex_kernel.inl), each callable only where the
+// instruction set (vector_vertex_kernel.inl), each callable only where the
 // CPU has it.
-void shade_diffuse_vertices_avx2(const DiffuseSceneView& scene, DiffuseBatchState* state);
-void shade_diffuse_vertices_avx512(const DiffuseSceneView& scene, DiffuseBatchState* state);
+void shade_vector_vertices_avx2(const VectorSceneView& scene, VectorBatchState* state);
+void shade_vector_vertices_avx512(const VectorSceneView& scene, VectorBatchState* state);
 
 // add_emission for lanes[0..n), whose rays left the scene, where the scene
-// view has an environment map (DiffuseSceneView::envmap): its radiance along
+// view has an environment map (VectorSceneView::envmap): its radiance along
 // each ray, MIS-weighted against sampling it, added to the lane's sums
 // (direct too at depth 0), bit for bit as the scalar stage adds it.
 // `hide_camera_rays`: PathTracerSettings::hide_emitters.
-void add_environment_avx2(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+void add_environment_avx2(const VectorSceneView& scene, VectorBatchState* state, const int32_t* lanes, int n,
                           bool hide_camera_rays);
-void add_environment_avx512(const DiffuseSceneView& scene, DiffuseBatchState* state, const int32_t* lanes, int n,
+void add_environment_avx512(const VectorSceneView& scene, VectorBatchState* state, const int32_t* lanes, int n,
                             bool hide_camera_rays);
 
 }  // namespace gdvr

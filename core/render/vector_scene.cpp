@@ -1,4 +1,4 @@
-#include "core/render/diffuse_scene.h"
+#include "core/render/vector_scene.h"
 
 #include <algorithm>
 #include <cmath>
@@ -71,11 +71,11 @@ void sample_emitter_lane(const void* scene, const float p[3], float u_select, fl
 
 }  // namespace
 
-std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::string* why_not) {
+std::unique_ptr<VectorScene> VectorScene::build(const FrameScene& fs, std::string* why_not) {
   const Scene& scene = fs.scene_;
   auto fail = [why_not](std::string reason) {
     *why_not = std::move(reason);
-    return std::unique_ptr<DiffuseScene>();
+    return std::unique_ptr<VectorScene>();
   };
   if (scene.emitters.empty()) return fail("the scene has no emitter");
   size_t triangle_count = 0, vector_shapes = 0;
@@ -90,7 +90,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
     return fail("the scene has " + std::to_string(triangle_count) + " triangles (records are built for at most " +
                 std::to_string(kMaxTriangles) + ")");
 
-  std::unique_ptr<DiffuseScene> ds(new DiffuseScene());
+  std::unique_ptr<VectorScene> ds(new VectorScene());
   ds->triangles_.resize(triangle_count);
   ds->shape_first_.assign(scene.shapes.size(), 0);
   ds->shape_flags_.assign(scene.shapes.size(), 0);
@@ -147,7 +147,7 @@ std::unique_ptr<DiffuseScene> DiffuseScene::build(const FrameScene& fs, std::str
   return ds;
 }
 
-bool DiffuseScene::refresh(const FrameScene& fs, std::string* why_not) {
+bool VectorScene::refresh(const FrameScene& fs, std::string* why_not) {
   for (size_t i : animated_shapes_)
     if (!bake_shape(fs, i, why_not)) return false;
   bake_emitters(fs);
@@ -155,7 +155,7 @@ bool DiffuseScene::refresh(const FrameScene& fs, std::string* why_not) {
   return true;
 }
 
-bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_not) {
+bool VectorScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_not) {
   const Scene& scene = fs.scene_;
   const Shape& shape = scene.shapes[i];
   const FrameScene::ShapeState& s = fs.shapes_[i];
@@ -182,7 +182,7 @@ bool DiffuseScene::bake_shape(const FrameScene& fs, size_t i, std::string* why_n
       *why_not = "animated " + shape_name(scene, i) + " interpolates vertex normals";
       return false;
     }
-    DiffuseTriangleRecord& r = triangles_[shape_first_[i] + t];
+    VectorTriangleRecord& r = triangles_[shape_first_[i] + t];
     put3(r.p0, p0);
     put3(r.p1, p1);
     put3(r.p2, p2);
@@ -216,13 +216,13 @@ static_assert(sizeof(AliasSlotRecord) == sizeof(AliasSlot) && offsetof(AliasSlot
                   offsetof(AliasSlotRecord, alias_pmf) == offsetof(AliasSlot, alias_pmf),
               "AliasSlotRecord mirrors AliasSlot");
 
-void DiffuseScene::bake_emitters(const FrameScene& fs) {
+void VectorScene::bake_emitters(const FrameScene& fs) {
   const Scene& scene = fs.scene_;
   // The environment map's tables and frame (its to_world may be animated).
   has_envmap_ = false;
   if (fs.environment_ >= 0 && scene.emitters[size_t(fs.environment_)].type == EmitterType::kEnvmap) {
     const Emitter& em = scene.emitters[size_t(fs.environment_)];
-    const FrameScene::Envmap& env = fs.envmaps_[size_t(fs.environment_)];
+    const EnvmapTables& env = fs.envmaps_[size_t(fs.environment_)];
     if (!env.distribution.empty()) {
       has_envmap_ = true;
       const Distribution2D& dist = env.distribution;
@@ -262,7 +262,7 @@ void DiffuseScene::bake_emitters(const FrameScene& fs) {
   // mesh; otherwise the kernel asks FrameScene lane by lane.
   for (const Emitter& em : scene.emitters) {
     if (em.type != EmitterType::kArea || scene.shapes[size_t(em.shape)].type != ShapeType::kMesh) return;
-    for (const FrameScene::ShapeState::EmitterTriangle& tri : fs.shapes_[size_t(em.shape)].emitter_triangles)
+    for (const EmitterTriangle& tri : fs.shapes_[size_t(em.shape)].emitter_triangles)
       if (!tri.face_normal) return;
   }
   for (size_t e = 0; e < scene.emitters.size(); ++e) {
@@ -270,7 +270,7 @@ void DiffuseScene::bake_emitters(const FrameScene& fs) {
     const FrameScene::ShapeState& s = fs.shapes_[size_t(em.shape)];
     emitter_first_[e] = uint32_t(emitter_triangles_.size());
     emitter_choice_[e] = &s.triangle_areas;
-    for (const FrameScene::ShapeState::EmitterTriangle& tri : s.emitter_triangles) {
+    for (const EmitterTriangle& tri : s.emitter_triangles) {
       EmitterTriangleRecord r;
       put3(r.p0, tri.p0);
       put3(r.p1, tri.p1);
@@ -283,7 +283,7 @@ void DiffuseScene::bake_emitters(const FrameScene& fs) {
   }
 }
 
-void DiffuseScene::update_view() {
+void VectorScene::update_view() {
   view_.triangles = triangles_.data();
   view_.shading = shading_.empty() ? nullptr : shading_.data();
   view_.shape_first = shape_first_.data();
@@ -304,8 +304,8 @@ void DiffuseScene::update_view() {
   view_.select_pdf = 1.0f / float(emitter_first_.size());
 }
 
-size_t DiffuseScene::memory_bytes() const {
-  return triangles_.size() * sizeof(DiffuseTriangleRecord) + shading_.size() * sizeof(ShadingRecord) +
+size_t VectorScene::memory_bytes() const {
+  return triangles_.size() * sizeof(VectorTriangleRecord) + shading_.size() * sizeof(ShadingRecord) +
          emitter_triangles_.size() * sizeof(EmitterTriangleRecord) +
          shape_conductor_.size() * sizeof(ConductorRecord) +
          shape_plastic_.size() * sizeof(PlasticRecord) +

@@ -1,6 +1,0 @@
-// The diffuse batch's vertex kernel for CPUs with AVX2: this file is
-// compiled with -mavx2 (core/CMakeLists.txt) and called only where the
-// CPU has it (diffuse_batch.cpp).
-#define GDVR_DIFFUSE_KERNEL shade_diffuse_vertices_avx2
-#define GDVR_ENVIRONMENT_KERNEL add_environment_avx2
-#include "core/render/diffuse_vertex_kernel.inl"
