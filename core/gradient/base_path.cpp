@@ -68,7 +68,7 @@ void mark_dark_suffixes(PathRecord* record) {
         rec.indirect += v.emission;
       }
     }
-    if (settings.max_depth >= 0 && depth + 1 >= settings.max_depth) break;
+    if (depth + 1 >= path_depth_limit(settings)) break;
     const Vec3f wo = si.wi;
 
     // ---- Emitter sampling (skipped for purely specular BSDFs) ----

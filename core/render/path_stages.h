@@ -94,11 +94,9 @@ inline void prefetch_for_next_vertex(const FrameScene& scene, const PathState& s
   scene.prefetch_next_emitter_sample(st.sampler);
 }
 
-// The depth of a path's last vertex under max_depth (INT_MAX: unbounded).
+// The depth of a path's last vertex under max_depth (path_depth_limit).
 // There only emission seen along the ray counts; nothing is sampled.
-inline int last_vertex_depth(const PathTracerSettings& settings) {
-  return settings.max_depth >= 0 ? settings.max_depth - 1 : std::numeric_limits<int>::max();
-}
+inline int last_vertex_depth(const PathTracerSettings& settings) { return path_depth_limit(settings) - 1; }
 
 // ---- After the closest-hit query (st->hit, st->si) ----
 

@@ -6,6 +6,7 @@
 #include <ostream>
 
 #include "core/render/perspective_camera.h"
+#include "core/render/path_tracer.h"
 #include "tests/core/stiff/stiff_test_util.h"
 
 namespace gdvr::stiff {
@@ -75,6 +76,32 @@ TEST(StiffFurnaceTest, TruncatedSeriesForShortPaths) {
     std::printf("[ furnace ] albedo %.2f max_depth %d: mean %.4f expected %.4f se %.4f\n", albedo, depth, mean,
                 expected, se);
     EXPECT_NEAR(mean, expected, 5 * se + 1e-3 * expected) << "albedo " << albedo << " max_depth " << depth;
+  }
+}
+
+// A furnace of albedo 1 with max_depth -1 loses no energy, so Russian
+// roulette never ends a path (survival min(throughput, 1) = 1): without the
+// depth limit the render never finished. With it every path has
+// kUnboundedDepthLimit segments, each seeing Le = 1.
+TEST(StiffFurnaceTest, LosslessUnboundedPathsEndAtTheDepthLimit) {
+  StiffCase c = find_case("furnace_depth1000");
+  c.params = {{"albedo", "1"}, {"max_depth", "-1"}};
+  c.res = 2;
+  for (Integ integ : {Integ::kPt, Integ::kGptReconnect}) {
+    auto out = run(make_job(c, integ, 1, 3));
+    ASSERT_EQ(out.size(), 1u) << integ_name(integ);
+    EXPECT_EQ(non_finite_layers(out[0]), "");
+    const Image& img = out[0].image.find(integ == Integ::kPt ? "" : "primal")->image;
+    const Image* direct = integ == Integ::kPt ? nullptr : &out[0].image.find("direct")->image;
+    double sum = 0;
+    for (size_t k = 0; k < img.data().size(); ++k) sum += img.data()[k] + (direct ? direct->data()[k] : 0.0f);
+    const double mean = sum / double(img.data().size());
+    std::printf("[ furnace ] %s albedo 1, unbounded: mean %.1f, limit %d\n", integ_name(integ), mean,
+                kUnboundedDepthLimit);
+    // Each bounce's expected contribution is Le (emission hit and emitter
+    // sample combined by MIS); 4 pixels x 3 channels x 65536 bounces of
+    // independent MIS noise average out to well under 1 %.
+    EXPECT_NEAR(mean, double(kUnboundedDepthLimit), 0.02 * kUnboundedDepthLimit) << integ_name(integ);
   }
 }
 
