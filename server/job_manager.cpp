@@ -67,20 +67,6 @@ bool read_file(const std::string& path, std::string* out) {
   return bool(in) || in.eof();
 }
 
-// Writes through a temporary file and rename so readers never see half a file.
-bool write_file_atomic(const std::string& path, const std::string& data) {
-  std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return false;
-    out.write(data.data(), std::streamsize(data.size()));
-    if (!out) return false;
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  return !ec;
-}
-
 }  // namespace
 
 JobManager::JobManager(ServerConfig config, std::unique_ptr<JobStore> store, UploadStore* uploads)

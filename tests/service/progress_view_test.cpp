@@ -54,14 +54,18 @@ TEST(ProgressViewTest, RecordedTgptStreamShowsBothStagesAndAnHonestEta) {
     const std::string line = view.line(t);
     SCOPED_TRACE("event " + std::to_string(i) + " at " + std::to_string(t) + " s: " + line);
     // The final count is the frames that have arrived; rendered is never behind it.
-    if (!ev.has_completed()) EXPECT_EQ(view.frames_final(), frames_received);
+    if (!ev.has_completed()) {
+      EXPECT_EQ(view.frames_final(), frames_received);
+    }
     EXPECT_LE(view.frames_final(), view.frames_rendered());
     EXPECT_LE(view.frames_rendered(), view.frames_total());
     EXPECT_GE(view.frames_final(), last_final);
     EXPECT_GE(view.rendered_percent(), last_percent);
     last_final = view.frames_final();
     last_percent = view.rendered_percent();
-    if (view.frames_rendered() < view.frames_total()) EXPECT_LT(view.rendered_percent(), 100);
+    if (view.frames_rendered() < view.frames_total()) {
+      EXPECT_LT(view.rendered_percent(), 100);
+    }
     // The bar: one '#' per final share, '+' for rendered but not final.
     EXPECT_EQ(count(line.substr(0, 32), '#'), view.frames_final() * 30 / view.frames_total());
     // ETA: 0 exactly once every frame is final, never before.
