@@ -42,8 +42,15 @@ void on_embree_error(void* user, RTCError code, const char* message) {
 }
 
 // Ray masks: static geometry answers to bit 0, instanced (animated) geometry
-// to bit 1, so a query can skip what cannot have moved.
-constexpr unsigned kStaticMask = 1u, kInstancedMask = 2u;
+// to bit 1, so a query can skip what cannot have moved; geometry that does not
+// emit answers to bit 2 as well (GeometrySet::kNonEmitters).
+constexpr unsigned kStaticMask = 1u, kInstancedMask = 2u, kNonEmitterMask = 4u, kAllMask = 0xFFFFFFFFu;
+
+unsigned geometry_mask(bool instanced, bool emits) {
+  return (instanced ? kInstancedMask : kStaticMask) | (emits ? 0u : kNonEmitterMask);
+}
+
+unsigned ray_mask(GeometrySet set) { return set == GeometrySet::kNonEmitters ? kNonEmitterMask : kAllMask; }
 
 // Embree's FLOAT3X4_COLUMN_MAJOR layout.
 void to_embree_matrix(const Transform& t, float out[12]) {
@@ -87,7 +94,7 @@ struct Accelerator::Impl {
   Status attach(int id, RTCGeometry geom, bool instanced, const Transform& to_world, bool emits) {
     rtcCommitGeometry(geom);
     if (!instanced) {
-      rtcSetGeometryMask(geom, kStaticMask);
+      rtcSetGeometryMask(geom, geometry_mask(false, emits));
       rtcCommitGeometry(geom);
       rtcAttachGeometryByID(top, geom, unsigned(id));
       if (emits) rtcAttachGeometryByID(emitters, geom, unsigned(id));
@@ -104,7 +111,7 @@ struct Accelerator::Impl {
     float xfm[12];
     to_embree_matrix(to_world, xfm);
     rtcSetGeometryTransform(inst, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
-    rtcSetGeometryMask(inst, kInstancedMask);
+    rtcSetGeometryMask(inst, geometry_mask(true, emits));
     rtcCommitGeometry(inst);
     rtcAttachGeometryByID(top, inst, unsigned(id));
     if (emits) rtcAttachGeometryByID(emitters, inst, unsigned(id));
@@ -260,7 +267,7 @@ bool Accelerator::intersect(Vec3f o, Vec3f d, float tmin, float tmax, RayHit* hi
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh;
-  set_ray(o, d, tmin, tmax, 0xFFFFFFFFu, &rh.ray);
+  set_ray(o, d, tmin, tmax, ray_mask(set), &rh.ray);
   clear_hit(&rh);
   rtcIntersect1(impl_->scene(set), &context, &rh);
   return read_hit(rh, hit);
@@ -270,7 +277,7 @@ bool Accelerator::occluded(Vec3f o, Vec3f d, float tmin, float tmax, bool instan
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay ray;
-  set_ray(o, d, tmin, tmax, instanced_only ? kInstancedMask : 0xFFFFFFFFu, &ray);
+  set_ray(o, d, tmin, tmax, instanced_only ? kInstancedMask : kAllMask, &ray);
   rtcOccluded1(impl_->top, &context, &ray);
   return read_occluded(ray);
 }
@@ -282,8 +289,15 @@ void Accelerator::intersect_stream(RayStreamBuffer& rays, int n, GeometrySet set
   if (coherence == RayCoherence::kCoherent) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   RTCRayHit* records = embree_records(rays.records_);
   RTCScene scene = impl_->scene(set);
+  // The records' masks stay kAllMask between queries (RayStreamBuffer sets
+  // them once); a masked query sets and restores its own.
+  const bool masked = set == GeometrySet::kNonEmitters;
+  if (masked)
+    for (int i = 0; i < n; ++i) records[i].ray.mask = ray_mask(set);
   if (n == 1) rtcIntersect1(scene, &context, records);  // the stream set-up buys nothing for one ray
   else rtcIntersect1M(scene, &context, records, unsigned(n), sizeof(RTCRayHit));
+  if (masked)
+    for (int i = 0; i < n; ++i) records[i].ray.mask = kAllMask;
 }
 
 void Accelerator::occluded_stream(RayStreamBuffer& rays, int n) const {

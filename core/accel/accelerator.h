@@ -7,7 +7,8 @@
 // so a frame change only updates an instance transform and refits the top
 // level instead of rebuilding every BVH. Geometry that emits light is also
 // in a second top-level scene of emitters only, for closest-hit queries that
-// look for emission alone (GeometrySet::kEmitters).
+// look for emission alone (GeometrySet::kEmitters), and answers to a ray mask
+// bit of its own so that a query can leave it out (GeometrySet::kNonEmitters).
 #pragma once
 
 #include <cstdint>
@@ -95,10 +96,11 @@ class RayStreamBuffer {
   Record records_[kCapacity];
 };
 
-// Which geometry a closest-hit query tests: all of it, or only what was added
+// Which geometry a closest-hit query tests: all of it; only what was added
 // with `emits` (its own BVH, so the query costs what the emitters cost: a few
-// spheres or quads in most scenes).
-enum class GeometrySet { kAll, kEmitters };
+// spheres or quads in most scenes); or all but that (a ray mask on the full
+// BVH): camera rays of a scene that hides its emitters pass through them.
+enum class GeometrySet { kAll, kEmitters, kNonEmitters };
 
 // How a stream's rays relate to each other. kCoherent: nearly parallel rays
 // from nearly one point, such as a path batch's camera rays (the samples of a

@@ -20,7 +20,7 @@ struct CameraHit {
 inline void trace_camera_hit(const FrameScene& scene, const Ray& ray, PathCounters& counters, CameraHit* out) {
   out->ray = ray;
   ++counters.rays;
-  out->hit = scene.intersect(ray, &out->si);
+  out->hit = scene.intersect_camera_ray(ray, &out->si);
 }
 
 inline CameraHit trace_camera_hit(const FrameScene& scene, const Ray& ray, PathCounters& counters) {

@@ -22,7 +22,7 @@ void CameraHitCache::begin(const Tile& tile, Vec2f jitter, PathCounters& counter
   size_t entry[kChunk];  // index into hits_
   int m = 0;
   auto flush = [&] {
-    scene_.accelerator().intersect_stream(rays, m);
+    scene_.accelerator().intersect_stream(rays, m, scene_.camera_geometry());
     counters.rays += uint64_t(m);
     for (int k = 0; k < m; ++k) {
       CameraHit& h = hits_[entry[k]];

@@ -107,7 +107,7 @@ ShiftResult TemporalShift::run(Vec2f film) {
   }
   SurfaceInteraction so;
   ++counters_.rays;
-  if (!other_.intersect(camera_ray, &so)) {
+  if (!other_.intersect_camera_ray(camera_ray, &so)) {
     acc_.fail_from(0, /* with_nee = */ true);
     return acc_.result();
   }

@@ -218,9 +218,9 @@ Vec3f FrameScene::interpolated_normal(const ShapeState& s, uint32_t tri, float b
   return (is_finite(interp) && length_squared(interp) > 0.5f) ? interp : face_n;
 }
 
-bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si) const {
+bool FrameScene::intersect(const Ray& ray, SurfaceInteraction* si, GeometrySet set) const {
   RayHit hit;
-  if (!accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, &hit)) return false;
+  if (!accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, &hit, set)) return false;
   interaction(ray, hit, si);
   return true;
 }

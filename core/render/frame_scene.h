@@ -55,11 +55,22 @@ class FrameScene {
   const Accelerator& accelerator() const { return *accel_; }
   bool has_environment() const { return environment_ >= 0; }
 
-  bool intersect(const Ray& ray, SurfaceInteraction* si) const;
+  bool intersect(const Ray& ray, SurfaceInteraction* si, GeometrySet set = GeometrySet::kAll) const;
   // The closest hit without its shading data (no interpolation, no frame),
   // for callers that need only what was hit; interaction() completes it.
-  bool intersect_hit(const Ray& ray, RayHit* hit) const {
-    return accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, hit);
+  bool intersect_hit(const Ray& ray, RayHit* hit, GeometrySet set = GeometrySet::kAll) const {
+    return accel_->intersect(ray.o, ray.d, ray.tmin, ray.tmax, hit, set);
+  }
+  // What camera rays can hit. A scene that hides its emitters
+  // (RenderDefaults::hide_emitters) shows what lies behind an area light, as
+  // Mitsuba 3's path integrators do (they skip area emitters along camera
+  // rays); the light still lights the scene, and later path segments still
+  // meet it. Every camera ray, of base and offset paths alike, asks this.
+  GeometrySet camera_geometry() const {
+    return scene_.defaults.hide_emitters ? GeometrySet::kNonEmitters : GeometrySet::kAll;
+  }
+  bool intersect_camera_ray(const Ray& ray, SurfaceInteraction* si) const {
+    return intersect(ray, si, camera_geometry());
   }
   // The same among the area emitters' shapes only (GeometrySet::kEmitters).
   bool intersect_emitter_hit(const Ray& ray, RayHit* hit) const {

@@ -227,7 +227,7 @@ inline void log_ray(const Ray& ray, bool shadow, GeometrySet set, uint32_t strea
                     RayCoherence coherence = RayCoherence::kIncoherent) {
   ++counters.rays;
   if (counters.ray_log)
-    counters.ray_log->push_back({ray, shadow, set == GeometrySet::kEmitters, coherence == RayCoherence::kCoherent, stream});
+    counters.ray_log->push_back({ray, shadow, set, coherence == RayCoherence::kCoherent, stream});
 }
 
 // The last ray under max_depth looks for emission only, so it does not ask
@@ -269,15 +269,23 @@ inline void cast_last(const FrameScene& scene, PathState* st, PathCounters& coun
   st->blocked = scene.occluded(st->shadow);
 }
 
+// What the closest-hit query of a path's ray at `depth` tests: camera rays
+// pass through the emitters of a scene that hides them
+// (FrameScene::camera_geometry).
+inline GeometrySet closest_hit_geometry(const FrameScene& scene, int depth) {
+  return depth == 0 ? scene.camera_geometry() : GeometrySet::kAll;
+}
+
 inline void cast_closest(const FrameScene& scene, const PathTracerSettings& settings, PathState* st,
                          PathCounters& counters) {
   if (st->depth >= last_vertex_depth(settings)) {
     cast_last(scene, st, counters);
     return;
   }
-  log_ray(st->ray, false, GeometrySet::kAll, 0, counters);
+  const GeometrySet set = closest_hit_geometry(scene, st->depth);
+  log_ray(st->ray, false, set, 0, counters);
   RayHit hit;
-  st->hit = scene.intersect_hit(st->ray, &hit);
+  st->hit = scene.intersect_hit(st->ray, &hit, set);
   if (st->hit) scene.interaction(st->ray, hit, &st->si);
 }
 
@@ -334,9 +342,10 @@ inline void cast_last_stream(const FrameScene& scene, PathState* paths, const in
 // The closest hits of paths[which[0..n)] (none at its last ray) as one stream.
 inline void cast_inner_stream(const FrameScene& scene, PathState* paths, const int* which, int n,
                               RayCoherence coherence, RayStream& stream, PathCounters& counters) {
-  log_stream(paths, which, n, false, GeometrySet::kAll, coherence, counters);
+  const GeometrySet set = closest_hit_geometry(scene, paths[which[0]].depth);
+  log_stream(paths, which, n, false, set, coherence, counters);
   for (int k = 0; k < n; ++k) set_stream_ray(stream, k, paths[which[k]].ray);
-  scene.accelerator().intersect_stream(stream, n, GeometrySet::kAll, coherence);
+  scene.accelerator().intersect_stream(stream, n, set, coherence);
   for (int k = 0; k < n; ++k) {
     PathState& st = paths[which[k]];
     st.hit = stream.found(k);

@@ -38,7 +38,7 @@ struct PathTracerSettings {
 struct RecordedRay {
   Ray ray;
   bool shadow = false;  // any-hit query
-  bool emitters_only = false;  // closest hit among the emitters (GeometrySet::kEmitters)
+  GeometrySet set = GeometrySet::kAll;  // what a closest-hit query tests
   bool coherent = false;  // cast in a stream flagged RayCoherence::kCoherent
   // Rays cast together in one stream query share a stream number (from 1);
   // 0 for a ray cast on its own.

@@ -321,12 +321,13 @@ void trace_started_vector_batch(const FrameScene& scene, const PathTracerSetting
   for (int depth = 0; count > 0 && depth < last; ++depth) {
     // ---- Closest hits: one stream, as cast_inner_stream ----
     const RayCoherence coherence = depth == 0 ? RayCoherence::kCoherent : RayCoherence::kIncoherent;
-    log_lanes(live, count, false, GeometrySet::kAll, coherence, counters, [&](int i) { return ray_of(s, i); });
+    const GeometrySet set = closest_hit_geometry(scene, depth);
+    log_lanes(live, count, false, set, coherence, counters, [&](int i) { return ray_of(s, i); });
     for (int k = 0; k < count; ++k) {
       const int i = live[k];
       stream.set(k, lane3(s.o, i), lane3(s.d, i), s.tmin[i], s.tmax[i]);
     }
-    scene.accelerator().intersect_stream(stream, count, GeometrySet::kAll, coherence);
+    scene.accelerator().intersect_stream(stream, count, set, coherence);
     int32_t escaped[kPathBatch];
     int escapes = 0;
     for (int k = 0; k < count; ++k) {

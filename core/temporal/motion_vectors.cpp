@@ -35,7 +35,7 @@ MotionField compute_motion_field(const FrameScene& scene, const Scene& desc_t, c
         SurfaceInteraction si;
         Vec2f film;
         bool ok;
-        if (scene.intersect(ray, &si)) {
+        if (scene.intersect_camera_ray(ray, &si)) {
           Vec3f p = si.p;
           if (si.shape >= 0 && size_t(si.shape) < moves.size() && moves[size_t(si.shape)])
             p = carry[size_t(si.shape)].point(p);

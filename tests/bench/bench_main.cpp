@@ -87,7 +87,6 @@ std::vector<RecordedRay> record_rays(const FrameScene& scene, const FrameRenderS
 }
 
 // What a recorded closest-hit query tested.
-GeometrySet geometry_set(const RecordedRay& r) { return r.emitters_only ? GeometrySet::kEmitters : GeometrySet::kAll; }
 
 // Casts `rays` one per call through the accelerator's bare Embree calls;
 // returns rays/s.
@@ -101,7 +100,7 @@ double replay_single(const Accelerator& accel, const std::vector<RecordedRay>& r
       for (size_t i = br.begin(); i != br.end(); ++i) {
         const RecordedRay& rr = rays[i];
         if (rr.shadow) local += accel.occluded(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax);
-        else local += accel.intersect(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax, &hit, geometry_set(rr));
+        else local += accel.intersect(rr.ray.o, rr.ray.d, rr.ray.tmin, rr.ray.tmax, &hit, rr.set);
       }
       hits += local;  // keeps the loop from being optimised away
     });
@@ -113,7 +112,7 @@ double replay_single(const Accelerator& accel, const std::vector<RecordedRay>& r
 
 bool rays_differ_in_kind(const std::vector<RecordedRay>& rays, size_t begin, size_t end) {
   for (size_t i = begin + 1; i < end; ++i)
-    if (rays[i].shadow != rays[begin].shadow || rays[i].emitters_only != rays[begin].emitters_only ||
+    if (rays[i].shadow != rays[begin].shadow || rays[i].set != rays[begin].set ||
         rays[i].coherent != rays[begin].coherent)
       return true;
   return false;
@@ -151,7 +150,7 @@ double replay_streams(const Accelerator& accel, const std::vector<RecordedRay>& 
           accel.occluded_stream(buffer, n);
           for (int k = 0; k < n; ++k) local += buffer.occluded(k);
         } else {
-          accel.intersect_stream(buffer, n, geometry_set(rays[begin]),
+          accel.intersect_stream(buffer, n, rays[begin].set,
                                  rays[begin].coherent ? RayCoherence::kCoherent : RayCoherence::kIncoherent);
           for (int k = 0; k < n; ++k) local += buffer.found(k);
         }

@@ -255,6 +255,58 @@ TEST(AcceleratorStreamTest, EmittersOnlySetFindsTheClosestEmitter) {
   EXPECT_GT(none, 1000);
 }
 
+// The set without emitters (camera rays of a scene that hides its emitters)
+// answers with the closest non-emitting geometry: the full scene's hit where
+// that emits nothing, else whatever lies behind the emitters; static and
+// instanced emitters alike, single and stream queries agree, and a stream
+// query leaves the buffer's masks as they were for the next query.
+TEST(AcceleratorStreamTest, NonEmittersSetLooksThroughEmitters) {
+  std::vector<int> spheres;
+  auto accel = make_scene(&spheres);
+  int plain_first = 0, behind_emitter = 0;
+  const std::vector<TestRay> rays = random_rays(8000, 900u);
+  // One buffer, refilled for a query of the full scene after each masked one.
+  std::vector<RayHit> stream_hits(rays.size()), all_hits(rays.size());
+  std::vector<char> found(rays.size()), all_found(rays.size());
+  RayStreamBuffer buffer;
+  for (size_t base = 0; base < rays.size(); base += RayStreamBuffer::kCapacity) {
+    for (GeometrySet set : {GeometrySet::kNonEmitters, GeometrySet::kAll}) {
+      const int m = fill_stream(rays, base, &buffer);
+      accel->intersect_stream(buffer, m, set);
+      for (int k = 0; k < m; ++k) {
+        (set == GeometrySet::kAll ? all_found : found)[base + size_t(k)] = buffer.found(k);
+        if (buffer.found(k)) (set == GeometrySet::kAll ? all_hits : stream_hits)[base + size_t(k)] = buffer.hit(k);
+      }
+    }
+  }
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const TestRay& r = rays[i];
+    RayHit all, single;
+    const bool any = accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &all);
+    const bool plain = accel->intersect(r.origin, r.dir, r.tmin, r.tmax, &single, GeometrySet::kNonEmitters);
+    ASSERT_EQ(bool(found[i]), plain) << i;
+    ASSERT_EQ(bool(all_found[i]), any) << i;  // the masked query left the buffer unmasked
+    if (any) ASSERT_EQ(all_hits[i].id, all.id) << i;
+    if (!plain) {
+      ASSERT_TRUE(!any || emits(all.id)) << i;
+      continue;
+    }
+    ASSERT_FALSE(emits(single.id)) << single.id;
+    ASSERT_EQ(stream_hits[i].id, single.id) << i;
+    ASSERT_TRUE(any);
+    if (!emits(all.id)) {
+      ASSERT_EQ(single.id, all.id) << i;
+      ASSERT_EQ(single.t, all.t) << i;
+      ++plain_first;
+    } else {
+      ASSERT_GT(single.t, all.t) << i;
+      ++behind_emitter;
+    }
+  }
+  EXPECT_GT(plain_first, 2000);
+  EXPECT_GT(behind_emitter, 20);
+}
+
 // Coherent streams (RayCoherence::kCoherent: a path batch's camera rays)
 // answer as single queries do, for the camera-like bundles they are meant for
 // and, only slower, for rays that part: Embree's coherent packets take another

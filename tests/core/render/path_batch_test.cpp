@@ -25,7 +25,7 @@ constexpr int kW = 20, kH = 16;
 bool same_bits(const Rgb& a, const Rgb& b) { return std::memcmp(&a, &b, sizeof(Rgb)) == 0; }
 
 auto ray_key(const RecordedRay& r) {
-  return std::make_tuple(r.shadow, r.emitters_only, r.ray.o.x, r.ray.o.y, r.ray.o.z, r.ray.d.x, r.ray.d.y, r.ray.d.z, r.ray.tmin,
+  return std::make_tuple(r.shadow, r.set, r.ray.o.x, r.ray.o.y, r.ray.o.z, r.ray.d.x, r.ray.d.y, r.ray.d.z, r.ray.tmin,
                          r.ray.tmax);
 }
 

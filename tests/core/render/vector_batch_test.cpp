@@ -30,7 +30,7 @@ constexpr int kW = 24, kH = 20;
 bool same_bits(const Rgb& a, const Rgb& b) { return std::memcmp(&a, &b, sizeof(Rgb)) == 0; }
 
 bool same_ray(const RecordedRay& a, const RecordedRay& b) {
-  return std::memcmp(&a.ray, &b.ray, sizeof(Ray)) == 0 && a.shadow == b.shadow && a.emitters_only == b.emitters_only &&
+  return std::memcmp(&a.ray, &b.ray, sizeof(Ray)) == 0 && a.shadow == b.shadow && a.set == b.set &&
          a.coherent == b.coherent && a.stream == b.stream;
 }
 
@@ -538,6 +538,21 @@ TEST(VectorBatchTest, RoomPathsMatchTheScalarBatchBitForBit) {
 
 // A caller that skips vector_batch_available() still gets the scalar
 // batch's paths, not a crash, on a scene without records.
+// A scene that hides its emitters: camera rays pass through the Cornell box's
+// light (FrameScene::camera_geometry) in both batches alike, ray for ray.
+TEST(VectorBatchTest, CameraRaysThroughHiddenEmittersMatchTheScalarBatch) {
+  auto ts = load_test_scene("cbox", kW, kH);
+  ASSERT_TRUE(ts);
+  if (!vector_batch_available(*ts->scene)) GTEST_SKIP() << "this CPU has no AVX2: the scalar batch runs";
+  Scene desc = ts->desc;
+  desc.defaults.hide_emitters = true;
+  auto hidden = FrameScene::create(desc, {});
+  ASSERT_TRUE(hidden.ok()) << hidden.status().to_string();
+  ASSERT_EQ((*hidden)->camera_geometry(), GeometrySet::kNonEmitters);
+  for (const Variant& v : kVariants)
+    if (v.hide_emitters) expect_same_as_scalar_batch(**hidden, v, kW, kH);
+}
+
 TEST(VectorBatchTest, SceneWithoutRecordsFallsBackToTheScalarBatch) {
   Scene desc;
   auto scene = load_scene_without_records(&desc);
