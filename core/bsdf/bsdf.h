@@ -104,6 +104,12 @@ struct BsdfEval {
 Rgb bsdf_eval(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
 float bsdf_pdf(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
 BsdfEval bsdf_eval_pdf(const Bsdf& bsdf, Vec2f uv, Vec3f wo, Vec3f wi);
+// A sample that leaves the direction as it was: a thin dielectric's
+// transmission (Mitsuba 3 flags it a "null" interaction).
+inline bool passes_straight_through(const Bsdf& bsdf, const BsdfSample& s) {
+  return bsdf.type == BsdfType::kThinDielectric && (s.lobe & kLobeDeltaTransmission) != 0;
+}
+
 // u_lobe selects among lobes, u_dir samples the direction. Returns false when no
 // direction could be sampled (the path ends).
 bool bsdf_sample(const Bsdf& bsdf, Vec2f uv, Vec3f wo, float u_lobe, Vec2f u_dir, BsdfSample* out);

@@ -66,9 +66,8 @@ class FrameScene {
   // Mitsuba 3's path integrators do (they skip area emitters along camera
   // rays); the light still lights the scene, and later path segments still
   // meet it. Every camera ray, of base and offset paths alike, asks this.
-  GeometrySet camera_geometry() const {
-    return scene_.defaults.hide_emitters ? GeometrySet::kNonEmitters : GeometrySet::kAll;
-  }
+  bool hides_emitters() const { return scene_.defaults.hide_emitters; }
+  GeometrySet camera_geometry() const { return hides_emitters() ? GeometrySet::kNonEmitters : GeometrySet::kAll; }
   bool intersect_camera_ray(const Ray& ray, SurfaceInteraction* si) const {
     return intersect(ray, si, camera_geometry());
   }

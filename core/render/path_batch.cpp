@@ -72,7 +72,7 @@ void trace_at_most_one_batch(const FrameScene& scene, const PathTracerSettings& 
     live[i] = i;
   }
   run_batch(scene, settings, paths, live, n, stream, counters);
-  for (int i = 0; i < n; ++i) out[i] = finish_path(paths[i], counters);
+  for (int i = 0; i < n; ++i) out[i] = finish_path(scene, paths[i], counters);
 }
 
 }  // namespace

@@ -58,6 +58,12 @@ struct PathState {
   SurfaceInteraction si;  // the vertex it found
   const Bsdf* bsdf = nullptr;  // its BSDF
   bool continues = true;  // false once the path has no next ray
+  // Some vertex has scattered the path other than straight through (a thin
+  // dielectric's transmission is straight through). In a scene that hides its
+  // emitters, a path that never scattered saw what it saw directly, and
+  // counts nothing (finish_path), as Mitsuba 3's "valid ray" rule has it: the
+  // environment behind a window pane stays hidden.
+  bool scattered = false;
 
   EmitterSample emitter;  // next-event estimation's sample at si
   float u_lobe = 0;       // BSDF sampling's numbers (draw_bsdf_numbers)
@@ -83,6 +89,7 @@ inline void start_path(PathState* st, const Ray& camera_ray, const Sampler& samp
   st->prev_bsdf_pdf = 1.0f;
   st->prev_bsdf_delta = true;
   st->continues = true;
+  st->scattered = false;
   st->blocked = false;
   st->shadow_pending = false;
 }
@@ -172,6 +179,7 @@ inline void sample_bsdf_drawn(const PathTracerSettings& settings, PathState* st,
   // bsdf_sample() returns only finite weights, pdfs and directions.
   const bool sampled = slope11 ? bsdf_sample_from_slope(*st->bsdf, si.uv, si.wi, st->u_lobe, *slope11, &bs)
                                : bsdf_sample(*st->bsdf, si.uv, si.wi, st->u_lobe, st->u_dir, &bs);
+  st->scattered = st->scattered || !(sampled && passes_straight_through(*st->bsdf, bs));
   if (!sampled || bs.weight.is_black()) return;
   st->throughput *= bs.weight;
   st->eta *= bs.eta;
@@ -217,7 +225,8 @@ inline PathSample finish_path(const Rgb& result, const Rgb& direct, PathCounters
   out.direct = direct;
   return out;
 }
-inline PathSample finish_path(const PathState& st, PathCounters& counters) {
+inline PathSample finish_path(const FrameScene& scene, const PathState& st, PathCounters& counters) {
+  if (scene.hides_emitters() && !st.scattered) return finish_path(Rgb(0.0f), Rgb(0.0f), counters);
   return finish_path(st.result, st.direct, counters);
 }
 

@@ -19,7 +19,7 @@ PathSample trace_path(const FrameScene& scene, const PathTracerSettings& setting
     if (st.shadow_pending) resolve_shadow(cast_shadow(scene, st, counters), &st);
   } while (st.continues);
   sampler = st.sampler;
-  return finish_path(st, counters);
+  return finish_path(scene, st, counters);
 }
 
 }  // namespace gdvr

@@ -78,6 +78,12 @@ std::unique_ptr<VectorScene> VectorScene::build(const FrameScene& fs, std::strin
     return std::unique_ptr<VectorScene>();
   };
   if (scene.emitters.empty()) return fail("the scene has no emitter");
+  // Paths through thin dielectrics carry PathState::scattered, which the
+  // lanes do not hold.
+  if (scene.defaults.hide_emitters)
+    for (const Bsdf& b : scene.bsdfs)
+      if (b.type == BsdfType::kThinDielectric)
+        return fail("the scene hides its emitters and has a thin dielectric");
   size_t triangle_count = 0, vector_shapes = 0;
   for (size_t i = 0; i < scene.shapes.size(); ++i) {
     if (shading_kind(scene, i) == kShapeScalar) continue;
