@@ -73,6 +73,11 @@ struct Bsdf {
   // Roughness used by gradient-domain shifts to classify a vertex as diffuse
   // (reconnectable) or glossy/specular (half-vector copy). Diffuse = +infinity.
   float roughness() const;
+  // Depends on the orientation of the shading frame around the normal
+  // (SurfaceInteraction::sh_frame.s), not only on the normal.
+  bool is_anisotropic() const {
+    return (type == BsdfType::kRoughConductor || type == BsdfType::kRoughDielectric) && alpha_u != alpha_v;
+  }
 };
 
 // Roughness of one sampled lobe (BsdfSample::lobe): +inf for diffuse lobes,

@@ -18,7 +18,9 @@ ShapeMotion::ShapeMotion(const Scene& from, const Scene& to) {
   motion_.resize(n);
   identity_.assign(n, true);
   det_.assign(n, 1.0f);
+  tangent_.assign(n, false);
   for (size_t i = 0; i < n && i < to.shapes.size(); ++i) {
+    tangent_[i] = from.bsdfs[size_t(from.shapes[i].bsdf)].is_anisotropic();
     const Transform& a = from.shapes[i].to_world;
     const Transform& b = to.shapes[i].to_world;
     if (a == b) continue;  // static: the identity, exactly
@@ -39,7 +41,9 @@ SurfaceInteraction ShapeMotion::carry(const SurfaceInteraction& si) const {
   SurfaceInteraction out = si;
   out.p = m.point(si.p);
   out.n = normalize(m.normal(si.n));
-  out.sh_frame = Frame(normalize(m.normal(si.sh_frame.n)));
+  const Vec3f n = normalize(m.normal(si.sh_frame.n));
+  // An anisotropic BSDF's tangent turns with its surface (FrameScene::interaction).
+  out.sh_frame = tangent_[size_t(si.shape)] ? Frame::along_tangent(n, m.vector(si.sh_frame.s)) : Frame(n);
   return out;
 }
 

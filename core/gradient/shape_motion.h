@@ -24,7 +24,8 @@ class ShapeMotion {
   bool same(int a, int b) const;
 
   // The interaction at the other frame: position, geometric and shading
-  // normals moved by M (shading frame rebuilt from the moved normal; uv,
+  // normals moved by M (shading frame rebuilt from the moved normal, and
+  // tangent where the BSDF is anisotropic; uv,
   // shape, primitive kept). `wi` is left for the caller to set.
   SurfaceInteraction carry(const SurfaceInteraction& si) const;
   // dA'/dA at si: |det A| · |A⁻ᵀ n| for the linear part A of M (1 if rigid).
@@ -34,6 +35,7 @@ class ShapeMotion {
   std::vector<Transform> motion_;
   std::vector<bool> identity_;
   std::vector<float> det_;
+  std::vector<bool> tangent_;  // the shape's shading frame follows dp/du (anisotropic BSDF)
 };
 
 }  // namespace gdvr

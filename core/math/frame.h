@@ -1,6 +1,8 @@
 // Orthonormal shading frame: local z is the normal. BSDFs work in this frame.
 #pragma once
 
+#include <cmath>
+
 #include "core/math/vec.h"
 
 namespace gdvr {
@@ -17,6 +19,21 @@ struct Frame {
     s = Vec3f(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
     t = Vec3f(b, sign + n.y * n.y * a, -n.y);
   }
+  // The frame around unit `normal` whose s is `tangent` made orthogonal to it
+  // (Gram-Schmidt), as Mitsuba 3 orients shading frames along dp/du, which
+  // anisotropic BSDFs depend on; Frame(normal) where `tangent` is (nearly)
+  // parallel to the normal or not finite.
+  static Frame along_tangent(Vec3f normal, Vec3f tangent) {
+    Vec3f s = tangent - normal * dot(normal, tangent);
+    const float len2 = length_squared(s);
+    if (!(len2 > 1e-12f * length_squared(tangent)) || !std::isfinite(len2)) return Frame(normal);
+    Frame f;
+    f.n = normal;
+    f.s = s * (1.0f / std::sqrt(len2));
+    f.t = cross(normal, f.s);
+    return f;
+  }
+
   Vec3f to_local(Vec3f v) const { return {dot(v, s), dot(v, t), dot(v, n)}; }
   Vec3f to_world(Vec3f v) const { return s * v.x + t * v.y + n * v.z; }
 };

@@ -19,6 +19,19 @@ float determinant_sign(const Transform& t) {
 
 float triangle_area(Vec3f a, Vec3f b, Vec3f c) { return 0.5f * length(cross(b - a, c - a)); }
 
+// dp/du of a triangle from its uv parametrization, as Mitsuba 3's meshes
+// define it. A mesh without uvs, or a triangle whose uvs are degenerate,
+// takes Mitsuba's coordinate_system of the face normal (Frame's tangent).
+Vec3f triangle_dpdu(const TriangleMesh& m, uint32_t i0, uint32_t i1, uint32_t i2, Vec3f p0, Vec3f p1, Vec3f p2,
+                    Vec3f face_n) {
+  if (!m.uvs.empty()) {
+    const Vec2f d1 = m.uvs[i1] - m.uvs[i0], d2 = m.uvs[i2] - m.uvs[i0];
+    const float det = d1.x * d2.y - d1.y * d2.x;
+    if (det != 0.0f && std::isfinite(det)) return ((p1 - p0) * d2.y - (p2 - p0) * d1.y) * (1.0f / det);
+  }
+  return Frame(face_n).s;
+}
+
 // The scale of the coordinates a hit on this triangle is interpolated from
 // (SurfaceInteraction::offset_floor), in world space.
 // The distance along `ray` to the sphere's root nearest Embree's `embree_t`,
@@ -71,6 +84,7 @@ Status FrameScene::build_shape_state(size_t i, bool animated) {
   s.to_world = shape.to_world;
   s.to_object = shape.to_world.inverse();
   s.handedness = determinant_sign(shape.to_world);
+  s.tangent_frame = scene_.bsdfs[size_t(shape.bsdf)].is_anisotropic();
   const std::string name = "shape " + std::to_string(i) + (shape.id.empty() ? "" : " ('" + shape.id + "')");
   const bool emits = shape.emitter >= 0;
   if (shape.type == ShapeType::kSphere) {
@@ -231,7 +245,7 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
   si->t = hit.t;
   si->shape = hit.id;
   si->prim = hit.prim;
-  Vec3f ns;
+  Vec3f ns, dpdu;
   if (shape.type == ShapeType::kSphere) {
     si->t = sphere_hit_distance(ray, s.center, s.radius, hit.t);
     Vec3f local = normalize(ray.o + ray.d * si->t - s.center);
@@ -242,6 +256,7 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
     Vec3f lo = normalize(s.to_object.vector(local));
     const float phi = atan2_turns(lo.y, lo.x);
     si->uv = {phi < 0.0f ? phi + 1.0f : phi, acos_half_turns(lo.z)};
+    if (s.tangent_frame) dpdu = s.to_world.vector(Vec3f(-lo.y, lo.x, 0.0f));  // d/d(phi), as Mitsuba's sphere
     si->offset_floor = std::min(1.0f, max_abs_component(s.center) + s.radius);
   } else {
     const TriangleMesh& m = *s.mesh;
@@ -254,12 +269,13 @@ void FrameScene::interaction(const Ray& ray, const RayHit& hit, SurfaceInteracti
     si->n = world_face_normal(s, hit.prim);
     ns = shading_normal(s, hit.prim, b1, b2, si->n);
     si->uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
+    if (s.tangent_frame) dpdu = triangle_dpdu(m, i0, i1, i2, p0, p1, p2, si->n);
   }
   if (shape.flip_normals) {
     si->n = -si->n;
     ns = -ns;
   }
-  si->sh_frame = Frame(ns);
+  si->sh_frame = s.tangent_frame ? Frame::along_tangent(ns, dpdu) : Frame(ns);
   si->wi = si->sh_frame.to_local(-ray.d);
 }
 

@@ -144,6 +144,9 @@ class FrameScene {
     // All 1 for a mesh without vertex normals (or with face_normals set).
     std::vector<uint8_t> flat;
     bool vertex_normals = false;  // shading interpolates the mesh's vertex normals
+    // The BSDF is anisotropic, so the shading frame follows dp/du
+    // (Frame::along_tangent); otherwise only its normal matters.
+    bool tangent_frame = false;
     bool instanced = false;
     Transform to_world, to_object;
     float handedness = 1;  // sign of det(to_world): a mirroring transform flips cross-product normals

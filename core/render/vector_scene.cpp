@@ -36,7 +36,9 @@ uint32_t shading_kind(const Scene& scene, size_t i) {
   const Bsdf& bsdf = scene.bsdfs[size_t(shape.bsdf)];
   if (bsdf.type == BsdfType::kDiffuse)
     return bsdf.reflectance.is_constant() && !is_finite(bsdf.reflectance.value) ? kShapeScalar : 0u;
-  if (bsdf.type == BsdfType::kRoughConductor && bsdf.distribution == MicrofacetType::kBeckmann &&
+  // The kernel builds its frames from the normal alone (Frame(n)), which an
+  // anisotropic BSDF cannot take (FrameScene::interaction).
+  if (bsdf.type == BsdfType::kRoughConductor && bsdf.distribution == MicrofacetType::kBeckmann && !bsdf.is_anisotropic() &&
       bsdf.sample_visible && bsdf.specular_reflectance.is_constant() && is_finite(bsdf.specular_reflectance.value) &&
       is_finite(bsdf.eta) && is_finite(bsdf.k))
     return kShapeConductor;
