@@ -35,6 +35,7 @@ typedef enum {
 } OIDNQuality;
 
 OIDNDevice oidnNewDevice(OIDNDeviceType type);
+void oidnSetDeviceBool(OIDNDevice device, const char* name, bool value);
 void oidnSetDeviceInt(OIDNDevice device, const char* name, int value);
 void oidnCommitDevice(OIDNDevice device);
 OIDNError oidnGetDeviceError(OIDNDevice device, const char** outMessage);

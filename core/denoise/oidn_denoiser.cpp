@@ -109,6 +109,10 @@ Expected<std::unique_ptr<OidnDenoiser>> OidnDenoiser::create(const OidnDenoiserS
     return internal_error(std::string("OIDN: no CPU device: ") + (message ? message : "unknown error"));
   }
   if (settings.threads > 0) oidnSetDeviceInt(impl->device, "numThreads", settings.threads);
+  // OIDN's CPU device runs on the process's TBB, the one gdvr renders with,
+  // and would pin the worker threads that enter its arena to cores; OIDN's
+  // docs advise turning that off where the application shares the threads.
+  oidnSetDeviceBool(impl->device, "setAffinity", false);
   oidnCommitDevice(impl->device);
   GDVR_RETURN_IF_ERROR(impl->device_error("creating the CPU device"));
   return std::unique_ptr<OidnDenoiser>(new OidnDenoiser(std::move(impl)));

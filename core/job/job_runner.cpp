@@ -265,7 +265,8 @@ class JobRenderer {
                           return std::find(names.begin(), names.end(), l) != names.end();
                         });
     if (!wanted) return Status::Ok();
-    auto features = render_feature_buffers(*scene_, pj_.render, FeatureBufferSettings{}, control.cancel);
+    auto features =
+        render_feature_buffers(*scene_, pj_.render, feature_buffer_settings_for(pj_.render.spp), control.cancel);
     if (!features.ok()) return features.status();
     out->stats.feature_seconds = features->seconds;
     add_feature_layers(std::move(features.value()), &out->layers);

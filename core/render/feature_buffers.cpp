@@ -1,8 +1,8 @@
 #include "core/render/feature_buffers.h"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
+#include <cmath>
 
 #include "core/bsdf/bsdf_albedo.h"
 #include "core/math/rng.h"
@@ -27,16 +27,6 @@ Rgb clamp01(Rgb c) {
   return {unit(c.r), unit(c.g), unit(c.b)};
 }
 
-// One path of a camera sample through delta surfaces: what it still
-// contributes (the delta lobes' tints, for the albedo; their probabilities,
-// for the normal).
-struct Branch {
-  Ray ray;
-  Rgb tint{1.0f};
-  float weight = 1;
-  int depth = 0;  // delta vertices behind it
-};
-
 // A delta lobe's tint without the radiance scaling of refraction (weight is
 // f / pdf with eta_ti^2 for a transmission; bs.eta = eta_it undoes it): the
 // albedo behind clear glass is the albedo, not the radiance it would carry.
@@ -45,45 +35,52 @@ Rgb delta_tint(const BsdfSample& bs) { return bs.weight * sqr(bs.eta); }
 }  // namespace
 
 Status FeatureBufferSettings::validate() const {
-  if (strata < 1 || strata > 64 || max_specular_depth < 0 || max_branches < 1 ||
-      max_branches > kMaxFeatureBranches)
-    return invalid_argument("feature buffers: need 1 <= strata <= 64, max_specular_depth >= 0 and "
-                            "1 <= max_branches <= " + std::to_string(kMaxFeatureBranches));
+  if (strata < 1 || strata > 64 || max_specular_depth < 0 || max_branches < 1)
+    return invalid_argument("feature buffers: need 1 <= strata <= 64, max_specular_depth >= 0 and max_branches >= 1");
   return Status::Ok();
 }
 
-FeatureSample trace_feature_sample(const FrameScene& scene, const Ray& camera_ray,
-                                   const FeatureBufferSettings& settings, bool hide_emitters) {
+FeatureBufferSettings feature_buffer_settings_for(int spp) {
+  FeatureBufferSettings s;
+  s.strata = std::clamp(int(std::sqrt(double(std::max(spp, 0)))), 2, 4);
+  return s;
+}
+
+FeatureTracer::FeatureTracer(const FrameScene& scene, const FeatureBufferSettings& settings, bool hide_emitters)
+    : scene_(scene), settings_(settings), hide_emitters_(hide_emitters) {
+  // Never more waiting than branches made: a split replaces one by two.
+  waiting_.reserve(size_t(settings.max_branches));
+}
+
+FeatureSample FeatureTracer::trace(const Ray& camera_ray) {
   FeatureSample out;
-  const Scene& desc = scene.scene();
-  // Branches waiting: never more than the branches made (a split replaces
-  // one by two), so at most max_branches.
-  std::array<Branch, kMaxFeatureBranches> stack;
-  int waiting = 0;
-  stack[waiting++] = Branch{camera_ray};
+  const Scene& desc = scene_.scene();
+  waiting_.clear();
+  waiting_.push_back({camera_ray, Rgb(1.0f), 1.0f, 0});
   int branches = 1;
   bool camera_vertex = true;
-  while (waiting > 0) {
-    const Branch b = stack[--waiting];
+  while (!waiting_.empty()) {
+    const Branch b = waiting_.back();
+    waiting_.pop_back();
     const bool seen_directly = camera_vertex;
     camera_vertex = false;
     ++out.rays;
     RayHit hit;
-    if (!scene.intersect_hit(b.ray, &hit)) {
-      if (!(seen_directly && hide_emitters)) out.albedo += b.tint * clamp01(scene.eval_environment(b.ray.d));
+    if (!scene_.intersect_hit(b.ray, &hit)) {
+      if (!(seen_directly && hide_emitters_)) out.albedo += b.tint * clamp01(scene_.eval_environment(b.ray.d));
       continue;
     }
     SurfaceInteraction si;
-    scene.interaction(b.ray, hit, &si);
+    scene_.interaction(b.ray, hit, &si);
     if (seen_directly) out.depth = si.t;
     const Vec3f n = si.sh_frame.n;
-    if (scene.emitter_of_shape(si.shape) >= 0 && !(seen_directly && hide_emitters)) {
-      out.albedo += b.tint * clamp01(scene.eval_area_emitter(si));
+    if (scene_.emitter_of_shape(si.shape) >= 0 && !(seen_directly && hide_emitters_)) {
+      out.albedo += b.tint * clamp01(scene_.eval_area_emitter(si));
       out.normal += n * b.weight;
       continue;
     }
     const Bsdf& bsdf = desc.bsdfs[size_t(desc.shapes[size_t(si.shape)].bsdf)];
-    if (!bsdf.is_delta_only() || b.depth >= settings.max_specular_depth) {
+    if (!bsdf.is_delta_only() || b.depth >= settings_.max_specular_depth) {
       out.albedo += b.tint * bsdf_albedo(bsdf, si.uv);
       out.normal += n * b.weight;
       continue;
@@ -97,15 +94,11 @@ FeatureSample trace_feature_sample(const FrameScene& scene, const Ray& camera_ra
       continue;
     }
     auto follow = [&](const BsdfSample& bs, float probability) {
-      Branch next;
-      next.ray = si.spawn_ray(si.sh_frame.to_world(bs.wi));
-      next.tint = b.tint * delta_tint(bs) * probability;
-      next.weight = b.weight * probability;
-      next.depth = b.depth + 1;
-      stack[waiting++] = next;
+      waiting_.push_back({si.spawn_ray(si.sh_frame.to_world(bs.wi)), b.tint * delta_tint(bs) * probability,
+                          b.weight * probability, b.depth + 1});
     };
     const bool two_lobes = has_first && has_last && first.lobe != last.lobe;
-    if (two_lobes && branches < settings.max_branches) {
+    if (two_lobes && branches < settings_.max_branches) {
       ++branches;
       follow(first, first.pdf);
       follow(last, last.pdf);
@@ -139,6 +132,7 @@ Expected<FeatureBuffers> render_feature_buffers(const FrameScene& scene, const F
   const float inv_k = 1.0f / float(k);
   const float inv_n = 1.0f / float(k * k);
   Status st = run_tiles(w, h, opts, [&](const Tile& tile) {
+    FeatureTracer tracer(scene, settings, frame.path.hide_emitters);
     uint64_t tile_rays = 0;
     for (int y = tile.y0; y < tile.y1; ++y)
       for (int x = tile.x0; x < tile.x1; ++x) {
@@ -152,7 +146,7 @@ Expected<FeatureBuffers> render_feature_buffers(const FrameScene& scene, const F
             const Vec2f u = sampler.next_2d();
             const Ray ray =
                 camera.generate_ray({float(x) + (float(i) + u.x) * inv_k, float(y) + (float(j) + u.y) * inv_k});
-            const FeatureSample s = trace_feature_sample(scene, ray, settings, frame.path.hide_emitters);
+            const FeatureSample s = tracer.trace(ray);
             albedo += s.albedo;
             normal += s.normal;
             depth = std::min(depth, s.depth);

@@ -46,8 +46,6 @@
 
 namespace gdvr {
 
-constexpr int kMaxFeatureBranches = 64;
-
 // The depth of a pixel that sees nothing: far past any scene, but finite, so
 // that every stage that treats a non-finite value as a corrupted buffer (and
 // zeroes it) leaves it alone, and sums over a depth image stay finite.
@@ -61,8 +59,7 @@ struct FeatureBufferSettings {
   // Branches a camera sample may split into at glass (see above).
   int max_branches = 8;
 
-  // 1 <= strata <= 64, max_specular_depth >= 0, 1 <= max_branches <= kMaxFeatureBranches.
-  Status validate() const;
+  Status validate() const;  // 1 <= strata <= 64, max_specular_depth >= 0, max_branches >= 1
 };
 
 struct FeatureBuffers {
@@ -73,6 +70,14 @@ struct FeatureBuffers {
   double seconds = 0;
 };
 
+// The pattern for a frame of `spp` samples per pixel (the pass size under a
+// time budget): k = floor(sqrt(spp)) clamped to [2, 4]. The pass then costs a
+// fixed share of the render, as a path sample traces several rays and a
+// feature sample about one: 2×2 for the few samples of a preview or a time
+// budget's passes (where a 4×4 pass would cost more than the sampling it
+// guides: the report's denoised baselines), 4×4 from 16 spp.
+FeatureBufferSettings feature_buffer_settings_for(int spp);
+
 // What one camera ray records (the pixel's values before averaging).
 struct FeatureSample {
   Rgb albedo;
@@ -80,11 +85,31 @@ struct FeatureSample {
   float depth = kMissDepth;
   uint32_t rays = 0;
 };
-// `hide_emitters`: emitters and the environment seen directly from the camera
-// count as the image shows them (black; an area emitter's own BSDF albedo),
-// not through a delta surface, as in the path tracer.
-FeatureSample trace_feature_sample(const FrameScene& scene, const Ray& camera_ray,
-                                   const FeatureBufferSettings& settings, bool hide_emitters);
+
+// Traces camera rays' features, one at a time; one per thread (it keeps the
+// branches waiting at glass between calls rather than making room per ray).
+class FeatureTracer {
+ public:
+  // `hide_emitters`: emitters and the environment seen directly from the
+  // camera count as the image shows them (black; an area emitter's own BSDF
+  // albedo), not through a delta surface, as in the path tracer.
+  FeatureTracer(const FrameScene& scene, const FeatureBufferSettings& settings, bool hide_emitters);
+  FeatureSample trace(const Ray& camera_ray);
+
+ private:
+  // One path of a camera sample through delta surfaces, with what it still
+  // contributes: the delta lobes' tints (albedo) and probabilities (normal).
+  struct Branch {
+    Ray ray;
+    Rgb tint;
+    float weight;
+    int depth;  // delta vertices behind it
+  };
+  const FrameScene& scene_;
+  FeatureBufferSettings settings_;
+  bool hide_emitters_;
+  std::vector<Branch> waiting_;
+};
 
 // The frame's feature buffers at frame.width × frame.height with frame.seed,
 // frame.threads, frame.tile_size and frame.path.hide_emitters. Returns

@@ -200,6 +200,15 @@ TEST(FeatureBuffersTest, SameBuffersWhateverTheThreadCount) {
   EXPECT_GT(centre.b, centre.r);
 }
 
+TEST(FeatureBuffersTest, PatternGrowsWithTheJobsSamplesFromTwoByTwoToFourByFour) {
+  EXPECT_EQ(feature_buffer_settings_for(1).strata, 2);  // a time budget's 1-spp passes
+  EXPECT_EQ(feature_buffer_settings_for(8).strata, 2);
+  EXPECT_EQ(feature_buffer_settings_for(9).strata, 3);
+  EXPECT_EQ(feature_buffer_settings_for(16).strata, 4);
+  EXPECT_EQ(feature_buffer_settings_for(4096).strata, 4);
+  EXPECT_TRUE(feature_buffer_settings_for(0).validate().ok());
+}
+
 TEST(FeatureBuffersTest, LayersAreNamedAsCompositorsExpect) {
   FeatureBuffers f;
   f.albedo = Image(2, 2, 3);
