@@ -45,8 +45,13 @@ else
   $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
 fi
 
-# Never fails the script: gdvr builds and runs without OIDN.
+# Never fails the script: gdvr builds and runs without OIDN. GDVR_WITH_OIDN=0
+# leaves it out (as the CMake option of that name does).
 install_oidn() {
+  if [ "${GDVR_WITH_OIDN:-1}" = "0" ]; then
+    echo "install-deps: Open Image Denoise left out (GDVR_WITH_OIDN=0)"
+    return 0
+  fi
   if compgen -G "$OIDN_VENV/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2*" >/dev/null; then
     echo "install-deps: Open Image Denoise present in $OIDN_VENV"
     return 0
