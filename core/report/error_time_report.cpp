@@ -679,8 +679,11 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
       }
       if (!denoiser) {
         if (requested) return Status(denoiser_status.code(), "report: " + m.name + ": " + denoiser_status.message());
-        if (denoiser_status.code() != StatusCode::kUnimplemented)
-          meta.notes.push_back(m.name + ": not available (" + denoiser_status.message() + ")");
+        meta.notes.push_back(m.name + ": not run (" +
+                             (denoiser_status.code() == StatusCode::kUnimplemented
+                                  ? std::string("this build has no Intel Open Image Denoise")
+                                  : denoiser_status.message()) +
+                             ")");
         continue;
       }
     }
