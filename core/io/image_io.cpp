@@ -95,15 +95,25 @@ float srgb_to_linear(float v) {
   return v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
 }
 
-// Splits "dx.R" into ("dx", "R") at the last '.', "R" into ("", "R").
+// The channels a bare name (no layer prefix) gives the main image: its
+// colour, alpha and luminance. Any other bare channel is a layer of its own
+// named as the channel, as EXR spells its standard depth channel: "Z" beside
+// "R,G,B" is the depth layer, not a fourth colour channel.
+bool is_main_image_channel(const std::string& channel) {
+  return channel == "R" || channel == "G" || channel == "B" || channel == "A" || channel == "Y";
+}
+
+// Splits "dx.R" into ("dx", "R") at the last '.', "R" into ("", "R") and
+// "Z" into ("Z", "Z").
 std::pair<std::string, std::string> split_channel_name(const std::string& full) {
   const size_t dot = full.rfind('.');
-  if (dot == std::string::npos) return {"", full};
+  if (dot == std::string::npos) return {is_main_image_channel(full) ? "" : full, full};
   return {full.substr(0, dot), full.substr(dot + 1)};
 }
 
+// The inverse: a layer's channel named as the layer itself is written bare.
 std::string full_channel_name(const std::string& layer, const std::string& channel) {
-  return layer.empty() ? channel : layer + "." + channel;
+  return layer.empty() || layer == channel ? channel : layer + "." + channel;
 }
 
 // Order used when a file carries no gdvrChannelOrder attribute (files from

@@ -15,7 +15,9 @@ Expected<Image> read_rgb_image(const std::string& path, bool raw = false);
 
 // Writes every layer as float (or half for `half_float`) channels of one
 // multi-layer EXR, atomically (temporary file + rename): "R,G,B" for the
-// unnamed layer, "<layer>.<channel>" for the others.
+// unnamed layer, "<layer>.<channel>" for the others, but a bare "<channel>"
+// where the layer is named as its channel (the depth layer "Z" becomes EXR's
+// standard "Z" channel; read_exr turns it back into that layer).
 Status write_exr(const std::string& path, const LayeredImage& image, bool half_float = false);
 // Reads every channel of an EXR back into layers (the inverse of write_exr).
 Expected<LayeredImage> read_exr(const std::string& path);

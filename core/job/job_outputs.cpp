@@ -14,6 +14,7 @@
 #include "core/io/image_io.h"
 #include "core/io/shipped_ocio_config.h"
 #include "core/image/error_metrics.h"
+#include "core/render/feature_buffers.h"
 #include "core/util/path_confinement.h"
 
 namespace gdvr {
@@ -61,6 +62,7 @@ nlohmann::ordered_json frame_json(const WrittenFrame& r) {
           {"bytes", r.bytes},
           {"render_seconds", s.render_seconds},
           {"reconstruct_seconds", s.reconstruct_seconds},
+          {"feature_seconds", s.feature_seconds},
           {"spp", s.spp},
           {"samples", s.samples},
           {"rays", s.rays},
@@ -88,6 +90,7 @@ Expected<WrittenFrame> parse_frame_entry(const std::string& json_text) {
     s.frame = j.value("frame", 0);
     s.render_seconds = j.value("render_seconds", 0.0);
     s.reconstruct_seconds = j.value("reconstruct_seconds", 0.0);
+    s.feature_seconds = j.value("feature_seconds", 0.0);
     s.spp = j.value("spp", 0);
     s.samples = j.value("samples", uint64_t(0));
     s.rays = j.value("rays", uint64_t(0));
@@ -113,13 +116,14 @@ std::string stats_json(const std::vector<std::pair<std::string, std::string>>& h
   j["frames_total"] = frames_total;
   j["frames_final"] = frames.size();
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  double render = 0, reconstruct = 0;
+  double render = 0, reconstruct = 0, features = 0;
   uint64_t rays = 0, temporal_rays = 0, samples = 0;
   std::map<std::string, int> left_out;  // how many frames left each thing out
   for (const WrittenFrame& r : frames) {
     list.push_back(frame_json(r));
     render += r.stats.render_seconds;
     reconstruct += r.stats.reconstruct_seconds;
+    features += r.stats.feature_seconds;
     rays += r.stats.rays;
     temporal_rays += r.stats.temporal_rays;
     samples += r.stats.samples;
@@ -128,6 +132,7 @@ std::string stats_json(const std::vector<std::pair<std::string, std::string>>& h
   j["frames"] = std::move(list);
   j["total"] = {{"render_seconds", render},
                 {"reconstruct_seconds", reconstruct},
+                {"feature_seconds", features},
                 {"samples", samples},
                 {"rays", rays},
                 {"temporal_rays", temporal_rays},
@@ -174,10 +179,15 @@ void remove_stale_temporaries(const std::string& dir) {
 }
 
 const std::vector<std::string>& known_exr_layers() {
-  static const std::vector<std::string> names = {
-      "direct",   "variance", "primal",   "dx",       "dy",       "dt",     "dxdt",
-      "dydt",     "primal_var", "dx_var", "dy_var",   "dt_var",   "dxdt_var", "dydt_var",
-      "shift_failure_rate", "temporal_failure_rate", "motion"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n = {
+        "direct",   "variance", "primal",   "dx",       "dy",       "dt",     "dxdt",
+        "dydt",     "primal_var", "dx_var", "dy_var",   "dt_var",   "dxdt_var", "dydt_var",
+        "shift_failure_rate", "temporal_failure_rate", "motion"};
+    // Every integrator's frames carry them (core/render/feature_buffers.h).
+    n.insert(n.end(), feature_layer_names().begin(), feature_layer_names().end());
+    return n;
+  }();
   return names;
 }
 

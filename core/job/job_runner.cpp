@@ -1,5 +1,6 @@
 #include "core/job/job_runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -8,6 +9,7 @@
 
 #include "core/gradient/gpt_integrator.h"
 #include "core/recon/reconstruct.h"
+#include "core/render/feature_buffers.h"
 #include "core/render/vector_batch.h"
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
@@ -242,6 +244,7 @@ class JobRenderer {
       const std::string scalar_why = why_no_vector_batch(*scene_, pj_.render.path, pj_.render.paths_in_flight);
       if (!scalar_why.empty()) st.left_out.push_back("the vector path batch's AVX2/AVX-512 kernel: " + scalar_why);
     }
+    GDVR_RETURN_IF_ERROR(render_features(control, &out));
     st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);
     st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;
     st.rays_per_second = st.render_seconds > 0 ? double(st.rays) / st.render_seconds : 0;
@@ -252,6 +255,23 @@ class JobRenderer {
 
  private:
   JobRenderer(const JobSpec& job, PreparedJob pj) : job_(job), pj_(std::move(pj)) {}
+
+  // The frame's feature buffers (albedo, N, Z) beside the integrator's
+  // layers, unless the job's EXR layer selection leaves them all out.
+  Status render_features(const FrameRenderControl& control, FrameBuffers* out) {
+    const std::vector<std::string>& selected = job_.outputs.exr_layers;
+    const bool wanted = selected.empty() || std::any_of(selected.begin(), selected.end(), [](const std::string& l) {
+                          const auto& names = feature_layer_names();
+                          return std::find(names.begin(), names.end(), l) != names.end();
+                        });
+    if (!wanted) return Status::Ok();
+    auto features =
+        render_feature_buffers(*scene_, pj_.render, feature_buffer_settings_for(pj_.render.spp), control.cancel);
+    if (!features.ok()) return features.status();
+    out->stats.feature_seconds = features->seconds;
+    add_feature_layers(std::move(features.value()), &out->layers);
+    return Status::Ok();
+  }
 
   // ---- T-GPT stage 1: two half passes, motion fields where the pair changes ----
   Status render_tgpt(int frame, const FrameRenderControl& control, FrameBuffers* out) {
@@ -503,6 +523,7 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
     out.image.layers.push_back(*direct);
     for (const char* name : {"primal_var", "dx_var", "dy_var"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
     if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
+    copy_feature_layers(fb.layers, &out.image);
     out.stats.left_out.push_back("temporal gradients and buffers: single-frame job");
     zero_non_finite_layers(&out);
     return out;
@@ -531,6 +552,7 @@ Expected<FrameOutput> finalize_tgpt_frame(const JobSpec& job, int frame, const s
   out.image.add("temporal_failure_rate", {"Y"}, std::move(tg.failure_rate));
   if (const ImageLayer* l = fb.layers.find("motion")) out.image.layers.push_back(*l);
   else out.image.add("motion", {"X", "Y", "V"}, Image(direct->image.width(), direct->image.height(), 3));
+  copy_feature_layers(fb.layers, &out.image);
   if (settings->window == 1)
     out.stats.left_out.push_back("temporal terms in the solve: window of 1 frame (spatial reconstruction)");
   if (!settings->motion_vectors)

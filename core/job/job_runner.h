@@ -21,6 +21,10 @@ struct FrameStats {
   int frame = 0;
   double render_seconds = 0;
   double reconstruct_seconds = 0;
+  // The feature buffers (albedo, N, Z; core/render/feature_buffers.h): a fixed
+  // cost on top of render_seconds, outside the time budget; 0 when the job's
+  // outputs.exr_layers selects none of them (they are not rendered then).
+  double feature_seconds = 0;
   int spp = 0;
   uint64_t samples = 0;        // camera samples
   uint64_t rays = 0;           // every ray traced (closest hit and shadow)

@@ -13,10 +13,12 @@
 #include <set>
 #include <sstream>
 
+#include "core/denoise/oidn_denoiser.h"
 #include "core/io/color_transform.h"
 #include "core/io/image_io.h"
 #include "core/recon/predicted_improvement.h"
 #include "core/image/error_metrics.h"
+#include "core/render/feature_buffers.h"
 #include "core/report/plot.h"
 
 namespace gdvr {
@@ -29,13 +31,18 @@ struct MethodSpec {
   // PT with the stratified direct-light pass the gradient-domain methods use
   // (job.direct_light 4/16): the stronger baseline; plain `pt` is Mitsuba's estimator.
   bool direct_pass = false;
+  // The frame denoised by OIDN guided by the feature buffers (albedo,
+  // normal): the "path tracing + denoiser" users compare gdvr with. Needs a
+  // build with OIDN (core/denoise/oidn_denoiser.h).
+  bool denoised = false;
 };
 
 const std::vector<MethodSpec>& all_methods() {
   static const std::vector<MethodSpec> kMethods = {
-      {"pt", "pt", ""},       {"pt-sd", "pt", "", true},           {"gpt-l1", "gpt", "l1"},
-      {"gpt-l2", "gpt", "l2"}, {"gpt-weighted", "gpt", "weighted"}, {"tgpt-l1", "tgpt", "l1"},
-      {"tgpt-l2", "tgpt", "l2"},
+      {"pt", "pt", ""},       {"pt-sd", "pt", "", true},           {"pt-oidn", "pt", "", false, true},
+      {"pt-sd-oidn", "pt", "", true, true},
+      {"gpt-l1", "gpt", "l1"}, {"gpt-l2", "gpt", "l2"}, {"gpt-weighted", "gpt", "weighted"},
+      {"tgpt-l1", "tgpt", "l1"}, {"tgpt-l2", "tgpt", "l2"},
   };
   return kMethods;
 }
@@ -245,6 +252,66 @@ Status build_reference(const ErrorTimeReportOptions& o, const std::vector<int>& 
   return Status::Ok();
 }
 
+// ---- Denoised baselines ----
+struct DenoiseOverhead {
+  double feature_seconds = 0, denoise_seconds = 0;
+  double total() const { return feature_seconds + denoise_seconds; }
+};
+
+struct DenoisedFrame {
+  Image image;
+  double seconds = 0;
+};
+
+// `color` denoised by OIDN with the frame's albedo and normal guides.
+Expected<DenoisedFrame> denoise_frame(const LayeredImage& frame, const Image& color, OidnDenoiser* denoiser) {
+  const ImageLayer* albedo = frame.find(kAlbedoLayer);
+  const ImageLayer* normal = frame.find(kNormalLayer);
+  if (!albedo || !normal) return internal_error("the frame has no albedo and normal layers to guide the denoiser");
+  if (!denoiser) return internal_error("no denoiser");
+  const auto start = std::chrono::steady_clock::now();
+  DenoiseInputs in;
+  in.color = &color;
+  in.albedo = &albedo->image;
+  in.normal = &normal->image;
+  auto out = denoiser->denoise(in);
+  if (!out.ok()) return out.status();
+  return DenoisedFrame{std::move(out.value()),
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()};
+}
+
+// The fixed cost per frame of a denoised method, measured on one frame of
+// the job at 1 spp: its feature buffers, and one denoise after a first one
+// that creates OIDN's filter (made once per report, not once per frame).
+Expected<DenoiseOverhead> measure_denoise_overhead(const ErrorTimeReportOptions& o, int frame, OidnDenoiser* denoiser,
+                                                   const std::atomic<bool>* cancel) {
+  JobSpec job = o.job;
+  job.integrator = "pt";
+  job.frames = std::to_string(frame);
+  job.spp = 1;
+  job.time_budget_s = 0;
+  job.reference.clear();
+  DenoiseOverhead overhead;
+  Status frame_status = internal_error("measuring the denoiser's cost: no frame came back");
+  JobCallbacks cb;
+  cb.on_frame_final = [&](const FrameOutput& out) {
+    overhead.feature_seconds = out.stats.feature_seconds;
+    const Image color = main_image(out.image);
+    for (int i = 0; i < 2; ++i) {
+      auto d = denoise_frame(out.image, color, denoiser);
+      if (!d.ok()) {
+        frame_status = d.status();
+        return;
+      }
+      overhead.denoise_seconds = d->seconds;
+    }
+    frame_status = Status::Ok();
+  };
+  GDVR_RETURN_IF_ERROR(run_job(job, o.run, cb, cancel));
+  GDVR_RETURN_IF_ERROR(frame_status.with_context("measuring the denoiser's cost: "));
+  return overhead;
+}
+
 // ---- One method at one budget ----
 struct RunImages {
   std::map<int, Image> final_frames;  // every frame (flicker needs them all)
@@ -256,14 +323,22 @@ struct NoiseAccumulator {
   std::array<double, kTermCount> count{};
 };
 
+// What a denoised method does to each frame, and what that costs.
+struct Denoising {
+  OidnDenoiser* denoiser = nullptr;
+  DenoiseOverhead overhead;
+};
+
 Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double budget, const std::vector<int>& frames,
-                  int display_frame, const Reference& ref, ReportRow* row, RunImages* images,
-                  const std::function<void(double)>& progress, const std::atomic<bool>* cancel) {
+                  int display_frame, const Reference& ref, const Denoising& denoising, ReportRow* row,
+                  RunImages* images, const std::function<void(double)>& progress, const std::atomic<bool>* cancel) {
   JobSpec job = o.job;
   job.integrator = m.integrator;
   if (!m.reconstruction.empty()) job.reconstruction.method = m.reconstruction;
   if (m.direct_pass) job.direct_light = {4, 16};
-  job.time_budget_s = budget;
+  // Equal time: a denoised method's sampling gets what its features and the
+  // denoiser leave of the budget (at least one pass: a budget > 0 renders one).
+  job.time_budget_s = m.denoised ? std::max(budget - denoising.overhead.total(), 1e-6) : budget;
   job.spp = 0;  // passes of 1 spp until the budget is spent
   job.reference.clear();
 
@@ -290,6 +365,16 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
     if (it == ref.frames.end() || img.empty()) {
       metric_status = internal_error("frame " + std::to_string(out.frame) + ": no image or no reference");
       return;
+    }
+    if (m.denoised) {
+      auto denoised = denoise_frame(out.image, img, denoising.denoiser);
+      if (!denoised.ok()) {
+        metric_status = denoised.status().with_context("frame " + std::to_string(out.frame) + ": ");
+        return;
+      }
+      img = std::move(denoised->image);
+      row->denoise_seconds += denoised->seconds;
+      row->render_seconds += s.feature_seconds;  // the guides are part of the method's rendering
     }
     auto sums = rel_mse_sums(img, it->second);
     if (!sums.ok()) {
@@ -343,8 +428,9 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
   const double n = row->frames;
   row->render_seconds /= n;
   row->reconstruct_seconds /= n;
+  row->denoise_seconds /= n;
   row->spp /= n;
-  row->seconds_per_frame = row->render_seconds + row->reconstruct_seconds;
+  row->seconds_per_frame = row->render_seconds + row->reconstruct_seconds + row->denoise_seconds;
   row->rel_mse_global = total.global();
   double pp = 0;
   for (double v : row->frame_rel_mse_per_pixel) pp += v;
@@ -575,9 +661,32 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
   const bool animated = frames.size() > 1;
 
   // ---- Methods ----
+  // OIDN's device for the denoised methods: made when one is asked for (all
+  // are, by default, in a build with OIDN); a build without it offers none.
+  std::unique_ptr<OidnDenoiser> denoiser;
+  Status denoiser_status = Status::Ok();
   std::vector<MethodSpec> methods;
   for (const MethodSpec& m : all_methods()) {
-    if (!o.methods.empty() && std::find(o.methods.begin(), o.methods.end(), m.name) == o.methods.end()) continue;
+    const bool requested = std::find(o.methods.begin(), o.methods.end(), m.name) != o.methods.end();
+    if (!o.methods.empty() && !requested) continue;
+    if (m.denoised) {
+      if (!denoiser && denoiser_status.ok()) {
+        OidnDenoiserSettings ds;
+        ds.threads = o.run.threads;
+        auto d = OidnDenoiser::create(ds);
+        if (d.ok()) denoiser = std::move(d.value());
+        else denoiser_status = d.status();
+      }
+      if (!denoiser) {
+        if (requested) return Status(denoiser_status.code(), "report: " + m.name + ": " + denoiser_status.message());
+        meta.notes.push_back(m.name + ": not run (" +
+                             (denoiser_status.code() == StatusCode::kUnimplemented
+                                  ? std::string("this build has no Intel Open Image Denoise")
+                                  : denoiser_status.message()) +
+                             ")");
+        continue;
+      }
+    }
     if (m.integrator == "tgpt") {
       if (!animated) {
         if (!o.methods.empty()) meta.notes.push_back(m.name + ": skipped, a still (T-GPT needs 2+ frames)");
@@ -624,6 +733,21 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
                          " to every global relMSE (its PT variance over its energy)");
 
   const int display_frame = frames[frames.size() / 2];
+  Denoising denoising;
+  denoising.denoiser = denoiser.get();
+  if (denoiser) {
+    auto overhead = measure_denoise_overhead(o, frames.front(), denoiser.get(), cancel);
+    if (!overhead.ok()) return overhead.status().with_context("report: ");
+    denoising.overhead = overhead.value();
+    meta.notes.push_back("denoised methods: features " + fmt("%.3f", overhead->feature_seconds) + " s + OIDN " +
+                         fmt("%.3f", overhead->denoise_seconds) +
+                         " s per frame (measured on frame " + std::to_string(frames.front()) +
+                         "), taken from each budget before sampling");
+    for (double b : o.budgets)
+      if (overhead->total() >= b)
+        meta.notes.push_back("denoised methods at " + fmt("%g", b) + " s: features and denoising alone take longer; "
+                             "one 1-spp pass, over the budget");
+  }
   std::vector<double> budgets = o.budgets;
   std::sort(budgets.begin(), budgets.end());
   budgets.erase(std::unique(budgets.begin(), budgets.end()), budgets.end());
@@ -664,7 +788,7 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
       };
       ReportRow row;
       RunImages run_images;
-      Status st = run_method(o, m, b, frames, display_frame, ref, &row, &run_images, progress, cancel);
+      Status st = run_method(o, m, b, frames, display_frame, ref, denoising, &row, &run_images, progress, cancel);
       if (!st.ok()) {
         if (st.code() == StatusCode::kCancelled) GDVR_RETURN_IF_ERROR(write_results());
         return st.with_context(m.name + " at " + fmt("%g", b) + " s: ");

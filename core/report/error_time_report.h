@@ -1,5 +1,6 @@
 // The error-vs-time report (docs/report.md): renders a job's frames with
-// PT, G-PT (L1, L2, weighted) and, for animations, T-GPT (L1, L2) at a series
+// PT (alone, and denoised by OIDN where the build has it), G-PT (L1, L2,
+// weighted) and, for animations, T-GPT (L1, L2) at a series
 // of equal wall-time budgets per frame, measures each against a reference
 // (rendered with high-spp PT and cached, or supplied as EXR), and writes
 // results.csv, results.json, log-log plots, images and report.html into one
@@ -28,8 +29,10 @@ struct ErrorTimeReportOptions {
   std::string reference;
   int reference_spp = 1024;
   std::vector<double> budgets = {0.5, 1, 2, 4};  // seconds per frame
-  // Methods to run, from pt, pt-sd, gpt-l1, gpt-l2, gpt-weighted, tgpt-l1, tgpt-l2;
-  // empty: all that apply (tgpt only for animations of 2+ frames).
+  // Methods to run, from pt, pt-sd, pt-oidn, pt-sd-oidn, gpt-l1, gpt-l2,
+  // gpt-weighted, tgpt-l1, tgpt-l2; empty: all that apply (tgpt only for
+  // animations of 2+ frames, the -oidn ones only in a build with OIDN, which
+  // fails with a message saying so when one of them is asked for).
   std::vector<std::string> methods;
   std::string ocio_config;  // display transform of the images; empty: a plain sRGB encoding
 };

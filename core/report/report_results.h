@@ -15,14 +15,17 @@ namespace gdvr {
 constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 
 struct ReportRow {
-  std::string method;          // "pt", "gpt-l1", "gpt-l2", "gpt-weighted", "tgpt-l1", "tgpt-l2"
+  std::string method;          // "pt", "pt-oidn", "gpt-l1", "gpt-l2", "gpt-weighted", "tgpt-l1", ...
   std::string integrator;      // pt | gpt | tgpt
   std::string reconstruction;  // "" for pt, else the job's reconstruction.method
   double budget_s = 0;         // time_budget_s per frame given to the renderer
   int frames = 0;
-  double seconds_per_frame = 0;    // measured: render + reconstruction, mean over frames
+  double seconds_per_frame = 0;    // measured: render + reconstruction + denoising, mean over frames
   double render_seconds = 0;       // mean per frame
   double reconstruct_seconds = 0;  // mean per frame
+  // Mean per frame: OIDN on the frame (denoised methods; their feature buffers
+  // count in render_seconds).
+  double denoise_seconds = 0;
   double spp = 0;                  // mean per frame
   double rel_mse_global = kNoValue;     // over all frames' pixels
   double rel_mse_per_pixel = kNoValue;  // mean over frames

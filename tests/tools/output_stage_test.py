@@ -3,14 +3,15 @@
 by gdvr-farm (chunks rendered apart, then finalize --video) and by gdvr-server
 (fetched with the gdvr CLI) leaves the same folder: the same file names, EXR
 frames and PNG previews equal byte for byte, and stats.json frame entries that
-differ only in their timings. All three go through core/job/job_outputs, so a
-difference here means a caller bypassed it.
+differ only in their timings; the frames carry the feature buffers. All three
+go through core/job/job_outputs, so a difference here means a caller bypassed
+it.
 
 The video is compared by its frame count only: the H.264
 encoder's bitstream may depend on thread timing."""
 import argparse, filecmp, json, os, shutil, signal, subprocess, sys, tempfile, time
 
-TIMING = {"render_seconds", "reconstruct_seconds", "samples_per_second", "rays_per_second"}
+TIMING = {"render_seconds", "reconstruct_seconds", "feature_seconds", "samples_per_second", "rays_per_second"}
 
 
 def fail(msg):
@@ -28,6 +29,35 @@ def frames_without_timing(folder):
     stats = json.load(open(os.path.join(folder, "stats.json")))
     frames = [{k: v for k, v in f.items() if k not in TIMING} for f in stats["frames"]]
     return stats, frames
+
+
+def exr_channels(path):
+    """The channel names of a single-part EXR, from its header's chlist
+    attribute (no OpenEXR module on the test machine)."""
+    data = open(path, "rb").read()
+    at = 8  # magic number and version
+    def cstring(i):
+        end = data.index(b"\0", i)
+        return data[i:end].decode(), end + 1
+    while data[at] != 0:
+        name, at = cstring(at)
+        kind, at = cstring(at)
+        size = int.from_bytes(data[at:at + 4], "little")
+        at += 4
+        if name == "channels" and kind == "chlist":
+            names, i = [], at
+            while data[i] != 0:
+                channel, i = cstring(i)
+                names.append(channel)
+                i += 16  # pixel type, pLinear and reserved, x and y sampling
+            return names
+        at += size
+    return []
+
+
+# The feature buffers every frame carries (core/render/feature_buffers.h),
+# named as compositors expect.
+FEATURE_CHANNELS = {"albedo.R", "albedo.G", "albedo.B", "N.X", "N.Y", "N.Z", "Z"}
 
 
 def video_frames(path):
@@ -105,6 +135,11 @@ def main():
         base_name = "gdvr-render"
         base = folders[base_name]
         base_stats, base_frames = frames_without_timing(base)
+        for f in expected[:4]:
+            channels = set(exr_channels(os.path.join(base, f)))
+            if not FEATURE_CHANNELS <= channels or not {"R", "G", "B"} <= channels:
+                fail(f"{base_name}: {f} has channels {sorted(channels)}, lacking "
+                     f"{sorted(FEATURE_CHANNELS - channels)} or R,G,B")
         if len(base_frames) != 4:
             fail(f"{base_name}: stats.json lists {len(base_frames)} frames, expected 4")
         for name, folder in folders.items():

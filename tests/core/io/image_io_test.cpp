@@ -65,6 +65,39 @@ TEST(ExrRoundTrip, MultiLayerOddSizeFloatIsExact) {
   std::remove(path.c_str());
 }
 
+// EXR's standard depth channel is a bare "Z" beside R,G,B: gdvr writes its
+// depth layer (named "Z", one channel "Z") so, and reads such a channel back
+// as that layer, not as a fourth colour channel of the main image.
+TEST(ExrRoundTrip, DepthLayerIsTheBareZChannel) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(6, 4, 3, 0.5f));
+  img.add("N", {"X", "Y", "Z"}, ramp(6, 4, 3, -1.0f));
+  img.add("Z", {"Z"}, ramp(6, 4, 1, 5.0f));
+  const std::string path = scratch("depth.exr");
+  ASSERT_TRUE(write_exr(path, img).ok());
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The channel list holds each name NUL-terminated, after the previous
+  // entry's sampling rate (1): "...\1\0\0\0Z\0".
+  EXPECT_NE(bytes.find(std::string("\1\0\0\0Z\0", 6)), std::string::npos);
+  EXPECT_EQ(bytes.find(std::string("Z.Z\0", 4)), std::string::npos);
+  EXPECT_NE(bytes.find(std::string("N.Z\0", 4)), std::string::npos);
+
+  Expected<LayeredImage> back = read_exr(path);
+  ASSERT_TRUE(back.ok()) << back.status().to_string();
+  ASSERT_EQ(back->layers.size(), 3u);
+  EXPECT_EQ(back->find("")->channels, (std::vector<std::string>{"R", "G", "B"}));
+  ASSERT_NE(back->find("Z"), nullptr);
+  EXPECT_EQ(back->find("Z")->channels, (std::vector<std::string>{"Z"}));
+  EXPECT_EQ(back->find("Z")->image.data(), img.layers[2].image.data());
+  // A layer "Z" beside a main image that has a channel "Z" names it twice.
+  LayeredImage twice;
+  twice.add("", {"R", "G", "Z"}, ramp(6, 4, 3, 0.5f));
+  twice.add("Z", {"Z"}, ramp(6, 4, 1, 5.0f));
+  EXPECT_EQ(write_exr(path, twice).code(), StatusCode::kInvalidArgument);
+  std::remove(path.c_str());
+}
+
 TEST(ExrRoundTrip, HalfFloatWithinHalfPrecision) {
   LayeredImage img;
   img.add("", {"R", "G", "B"}, ramp(9, 3, 3, 0.25f));

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/io/image_io.h"
+#include "core/render/feature_buffers.h"
 #include "core/scene/animation.h"
 
 namespace gdvr {
@@ -73,11 +74,56 @@ TEST(JobOutputsTest, KnownLayersNameEveryLayerTheIntegratorsWrite) {
   }
 }
 
+// Every integrator's final frames carry the feature buffers, and the EXR
+// names them as compositors expect: albedo.R/G/B, N.X/Y/Z and a bare Z.
+TEST(JobOutputsTest, EveryIntegratorsFramesCarryTheFeatureBuffers) {
+  for (const char* integrator : {"pt", "gpt", "tgpt"}) {
+    SCOPED_TRACE(integrator);
+    JobSpec job = tiny_demo_job(integrator);
+    std::vector<FrameOutput> frames = render(job);
+    ASSERT_EQ(frames.size(), 3u);
+    fs::path dir = fresh_dir(std::string("features_") + integrator);
+    auto outputs = JobOutputs::open(job, {0, 1, 2}, dir.string(), {});
+    ASSERT_TRUE(outputs.ok()) << outputs.status().to_string();
+    for (const FrameOutput& f : frames) {
+      EXPECT_GT(f.stats.feature_seconds, 0.0);
+      auto written = outputs.value()->write_frame(f);
+      ASSERT_TRUE(written.ok()) << written.status().to_string();
+      auto back = read_exr((dir / written->file).string());
+      ASSERT_TRUE(back.ok()) << back.status().to_string();
+      const ImageLayer* albedo = back->find("albedo");
+      const ImageLayer* normal = back->find("N");
+      const ImageLayer* depth = back->find("Z");
+      ASSERT_TRUE(albedo && normal && depth);
+      EXPECT_EQ(albedo->channels, (std::vector<std::string>{"R", "G", "B"}));
+      EXPECT_EQ(normal->channels, (std::vector<std::string>{"X", "Y", "Z"}));
+      EXPECT_EQ(depth->channels, (std::vector<std::string>{"Z"}));
+      EXPECT_EQ(back->find("")->channels, (std::vector<std::string>{"R", "G", "B"}));
+      for (float v : albedo->image.data()) {
+        EXPECT_GE(v, 0.0f);
+        EXPECT_LE(v, 1.0f);
+      }
+      // Distances, finite (kMissDepth where nothing is seen); the box's back
+      // wall is in the middle of the view.
+      for (float v : depth->image.data()) {
+        EXPECT_GT(v, 0.0f);
+        EXPECT_LE(v, kMissDepth);
+      }
+      EXPECT_LT(depth->image.at(6, 6, 0), kMissDepth);
+      EXPECT_EQ(depth->image.data(), f.image.find("Z")->image.data());
+    }
+    fs::remove_all(dir);
+  }
+}
+
 TEST(JobOutputsTest, ExrLayersKeepsTheImageAndTheSelectedLayers) {
   JobSpec job = tiny_demo_job("gpt");
   job.outputs.exr_layers = {"dx", "dt"};  // gpt has no dt: named in left_out
   std::vector<FrameOutput> frames = render(job);
   ASSERT_FALSE(frames.empty());
+  // A selection without the feature buffers does not render them.
+  EXPECT_EQ(frames[0].image.find("albedo"), nullptr);
+  EXPECT_EQ(frames[0].stats.feature_seconds, 0.0);
   fs::path dir = fresh_dir("select");
   ASSERT_TRUE(JobOutputs::validate(job, {}, 0).ok());
   auto outputs = JobOutputs::open(job, {0, 1, 2}, dir.string(), {});
@@ -109,11 +155,11 @@ TEST(JobOutputsTest, ExrLayersKeepsTheImageAndTheSelectedLayers) {
 
 TEST(JobOutputsTest, UnknownOrRepeatedLayersAreRejectedWithTheFieldNamed) {
   JobSpec job = tiny_demo_job("tgpt");
-  job.outputs.exr_layers = {"primal", "albedo"};
+  job.outputs.exr_layers = {"primal", "specular"};
   Status st = JobOutputs::validate(job, {}, 0);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(st.message().find("outputs.exr_layers[1]"), std::string::npos) << st.message();
-  EXPECT_NE(st.message().find("albedo"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("specular"), std::string::npos) << st.message();
   job.outputs.exr_layers = {"dt", "dt"};
   st = JobOutputs::validate(job, {}, 0);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);

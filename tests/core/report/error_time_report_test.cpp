@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "core/denoise/oidn_denoiser.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -65,8 +67,9 @@ TEST(ErrorTimeReportTest, AnimationEndToEndWritesSaneResults) {
   EXPECT_FALSE(report->meta.reference_cached);
   EXPECT_EQ(report->meta.width, 16);
 
-  // Every method at every budget.
-  ASSERT_EQ(report->rows.size(), 2u * 7u);
+  // Every method at every budget (the two denoised ones where OIDN is built in).
+  const size_t methods = OidnDenoiser::available() ? 9 : 7;
+  ASSERT_EQ(report->rows.size(), 2u * methods);
   for (const ReportRow& r : report->rows) {
     SCOPED_TRACE(r.method + " @ " + std::to_string(r.budget_s));
     EXPECT_EQ(r.frames, 3);
@@ -110,9 +113,9 @@ TEST(ErrorTimeReportTest, AnimationEndToEndWritesSaneResults) {
   EXPECT_TRUE(is_png(out / "images/reference.png"));
 
   const std::string csv = slurp(out / "results.csv");
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 15);
+  EXPECT_EQ(size_t(std::count(csv.begin(), csv.end(), '\n')), 2 * methods + 1);
   auto j = nlohmann::json::parse(slurp(out / "results.json"));
-  ASSERT_EQ(j["rows"].size(), 14u);
+  ASSERT_EQ(j["rows"].size(), 2 * methods);
   EXPECT_EQ(j["reference"]["spp"], 32);
 
   // The HTML is self-contained: relative images only, every image it names exists.
@@ -163,6 +166,59 @@ TEST(ErrorTimeReportTest, StillSceneRunsNoTgptAndHasNoFlicker) {
   EXPECT_TRUE(noted);
   fs::remove_all(out);
 }
+
+#ifdef GDVR_HAVE_OIDN
+
+// PT + OIDN guided by albedo and normal at equal time: the feature pass and
+// the denoiser come out of the budget, and both count in the row's time.
+TEST(ErrorTimeReportTest, DenoisedBaselinesCountFeaturesAndDenoisingInTheirTime) {
+  const fs::path out = fresh_dir("oidn");
+  ErrorTimeReportOptions o = tiny_demo_report(out);
+  o.job.frames = "1";
+  o.job.width = o.job.height = 32;
+  o.budgets = {0.15};
+  o.methods = {"pt", "pt-oidn", "pt-sd-oidn"};
+  auto report = run_error_time_report(o, nullptr, nullptr);
+  ASSERT_TRUE(report.ok()) << report.status().to_string();
+  ASSERT_EQ(report->rows.size(), 3u);
+  const ReportRow& pt = report->rows[0];
+  EXPECT_EQ(pt.denoise_seconds, 0.0);
+  for (const ReportRow& r : {report->rows[1], report->rows[2]}) {
+    SCOPED_TRACE(r.method);
+    EXPECT_EQ(r.integrator, "pt");
+    EXPECT_GT(r.denoise_seconds, 0.0);
+    EXPECT_NEAR(r.seconds_per_frame, r.render_seconds + r.reconstruct_seconds + r.denoise_seconds, 1e-9);
+    EXPECT_EQ(r.non_finite, 0.0);
+    EXPECT_GE(r.spp, 1.0);
+    // Sane: positive, far below a black image's 1. Whether the denoiser beats
+    // PT depends on the budget (OIDNDenoiserTest checks it at a few spp).
+    EXPECT_GT(r.rel_mse_global, 0.0);
+    EXPECT_LT(r.rel_mse_global, 0.5);
+  }
+  EXPECT_EQ(report->rows[1].method, "pt-oidn");
+  bool noted = false;
+  for (const std::string& n : report->meta.notes) noted = noted || n.find("denoised methods: features") == 0;
+  EXPECT_TRUE(noted);
+  EXPECT_NE(slurp(out / "results.csv").find("denoise_seconds"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "images/pt-oidn_0p15s.png"));
+  fs::remove_all(out);
+}
+
+#else
+
+TEST(ErrorTimeReportTest, DenoisedBaselinesNeedABuildWithOidn) {
+  const fs::path out = fresh_dir("no_oidn");
+  ErrorTimeReportOptions o = tiny_demo_report(out);
+  o.methods = {"pt", "pt-oidn"};
+  auto r = run_error_time_report(o, nullptr, nullptr);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kUnimplemented);
+  EXPECT_NE(r.status().message().find("pt-oidn"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("built without Intel Open Image Denoise"), std::string::npos);
+  fs::remove_all(out);
+}
+
+#endif
 
 TEST(ErrorTimeReportTest, BadInputsAreNamedErrors) {
   const fs::path out = fresh_dir("bad");
