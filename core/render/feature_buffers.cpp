@@ -66,7 +66,8 @@ FeatureSample FeatureTracer::trace(const Ray& camera_ray) {
     camera_vertex = false;
     ++out.rays;
     RayHit hit;
-    if (!scene_.intersect_hit(b.ray, &hit)) {
+    // Camera rays pass through hidden emitters (FrameScene::camera_geometry).
+    if (!scene_.intersect_hit(b.ray, &hit, seen_directly ? scene_.camera_geometry() : GeometrySet::kAll)) {
       if (!(seen_directly && hide_emitters_)) out.albedo += b.tint * clamp01(scene_.eval_environment(b.ray.d));
       continue;
     }
