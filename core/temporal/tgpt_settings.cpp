@@ -4,14 +4,10 @@
 
 namespace gdvr {
 
-const char* temporal_shift_name(TemporalShiftMapping m) {
-  return m == TemporalShiftMapping::kReconnect ? "reconnect" : "replay";
-}
+const char* temporal_shift_name(TemporalShiftMapping m) { return enum_name(kTemporalShiftNames, m); }
 
 Expected<TemporalShiftMapping> parse_temporal_shift(const std::string& name) {
-  for (TemporalShiftMapping m : {TemporalShiftMapping::kReplay, TemporalShiftMapping::kReconnect})
-    if (name == temporal_shift_name(m)) return m;
-  return invalid_argument("temporal_shift: unknown '" + name + "' (expected replay or reconnect)");
+  return parse_enum_name(kTemporalShiftNames, name, "temporal_shift");
 }
 
 Status TgptSettings::validate() const {
