@@ -18,12 +18,6 @@ Expected<int> int_value(const std::string& flag, const std::string& text, int lo
   return int(v);
 }
 
-// A named value of an enum (--shift, --temporal-shift, --recon).
-template <typename Enum, size_t N>
-Expected<Enum> name_value(const std::string& flag, const std::string& text, const EnumNames<Enum, N>& names) {
-  return parse_enum_name(names, text, flag.c_str());
-}
-
 }  // namespace
 
 Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, JobFlags* flags) {
@@ -48,6 +42,12 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
 
   auto set_int = [&](int lo, int hi, std::optional<int>* out) -> Expected<bool> {
     auto v = int_value(a, value, lo, hi);
+    if (!v.ok()) return v.status();
+    *out = v.value();
+    return true;
+  };
+  auto set_name = [&](const auto& names, auto* out) -> Expected<bool> {
+    auto v = parse_enum_name(names, value, a.c_str());
     if (!v.ok()) return v.status();
     *out = v.value();
     return true;
@@ -80,19 +80,9 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
     if (!parse_param(value, &flags->params)) return invalid_argument("--param: expected NAME=VALUE");
   } else if (a == "--integrator") {
     flags->integrator = value;
-  } else if (a == "--shift") {
-    auto v = name_value(a, value, kShiftMappingNames);
-    if (!v.ok()) return v.status();
-    flags->shift = v.value();
-  } else if (a == "--temporal-shift") {
-    auto v = name_value(a, value, kTemporalShiftNames);
-    if (!v.ok()) return v.status();
-    flags->temporal_shift = v.value();
-  } else if (a == "--recon") {
-    auto v = name_value(a, value, kReconMethodNames);
-    if (!v.ok()) return v.status();
-    flags->recon = v.value();
-  }
+  } else if (a == "--shift") return set_name(kShiftMappingNames, &flags->shift);
+  else if (a == "--temporal-shift") return set_name(kTemporalShiftNames, &flags->temporal_shift);
+  else if (a == "--recon") return set_name(kReconMethodNames, &flags->recon);
   return true;
 }
 
