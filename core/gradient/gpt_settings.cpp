@@ -5,12 +5,6 @@
 
 namespace gdvr {
 
-const char* shift_mapping_name(ShiftMapping m) { return enum_name(kShiftMappingNames, m); }
-
-Expected<ShiftMapping> parse_shift_mapping(const std::string& name) {
-  return parse_enum_name(kShiftMappingNames, name, "shift");
-}
-
 GptSettings GptSettings::defaults_for(ShiftMapping shift) {
   GptSettings s;
   s.shift = shift;

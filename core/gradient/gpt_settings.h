@@ -24,8 +24,10 @@ enum class ShiftMapping {
 inline constexpr EnumNames<ShiftMapping, 3> kShiftMappingNames = {{{ShiftMapping::kReplay, "replay"},
                                                                    {ShiftMapping::kReconnect, "reconnect"},
                                                                    {ShiftMapping::kHybrid, "hybrid"}}};
-const char* shift_mapping_name(ShiftMapping m);
-Expected<ShiftMapping> parse_shift_mapping(const std::string& name);
+inline const char* shift_mapping_name(ShiftMapping m) { return enum_name(kShiftMappingNames, m); }
+inline Expected<ShiftMapping> parse_shift_mapping(const std::string& name) {
+  return parse_enum_name(kShiftMappingNames, name, "shift");
+}
 
 // The G-PT paper's choice and every job's default.
 inline constexpr ShiftMapping kDefaultShiftMapping = ShiftMapping::kReconnect;

@@ -5,12 +5,6 @@
 
 namespace gdvr {
 
-const char* recon_method_name(ReconMethod m) { return enum_name(kReconMethodNames, m); }
-
-Expected<ReconMethod> parse_recon_method(const std::string& name) {
-  return parse_enum_name(kReconMethodNames, name, "recon method");
-}
-
 namespace {
 Status positive_finite(double v, const char* field) {
   if (!std::isfinite(v) || v <= 0)

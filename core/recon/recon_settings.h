@@ -25,8 +25,10 @@ inline constexpr EnumNames<ReconMethod, 5> kReconMethodNames = {{{ReconMethod::k
                                                                  {ReconMethod::kUniform, "uniform"},
                                                                  {ReconMethod::kWeighted, "weighted"},
                                                                  {ReconMethod::kNone, "none"}}};
-const char* recon_method_name(ReconMethod m);
-Expected<ReconMethod> parse_recon_method(const std::string& name);
+inline const char* recon_method_name(ReconMethod m) { return enum_name(kReconMethodNames, m); }
+inline Expected<ReconMethod> parse_recon_method(const std::string& name) {
+  return parse_enum_name(kReconMethodNames, name, "recon method");
+}
 
 // Primal weight α of ‖α(Ī − I_g)‖: 0.2 in the G-PT and T-GPT releases, and
 // the default of every job.

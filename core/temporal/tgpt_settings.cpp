@@ -4,12 +4,6 @@
 
 namespace gdvr {
 
-const char* temporal_shift_name(TemporalShiftMapping m) { return enum_name(kTemporalShiftNames, m); }
-
-Expected<TemporalShiftMapping> parse_temporal_shift(const std::string& name) {
-  return parse_enum_name(kTemporalShiftNames, name, "temporal_shift");
-}
-
 Status TgptSettings::validate() const {
   GDVR_RETURN_IF_ERROR(gpt.validate().with_context("tgpt.gpt: "));
   GDVR_RETURN_IF_ERROR(recon.validate().with_context("tgpt.recon: "));

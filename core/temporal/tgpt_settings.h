@@ -27,8 +27,10 @@ enum class TemporalShiftMapping {
 // The spellings of job files and flags ("temporal_shift", --temporal-shift).
 inline constexpr EnumNames<TemporalShiftMapping, 2> kTemporalShiftNames = {
     {{TemporalShiftMapping::kReplay, "replay"}, {TemporalShiftMapping::kReconnect, "reconnect"}}};
-const char* temporal_shift_name(TemporalShiftMapping m);
-Expected<TemporalShiftMapping> parse_temporal_shift(const std::string& name);
+inline const char* temporal_shift_name(TemporalShiftMapping m) { return enum_name(kTemporalShiftNames, m); }
+inline Expected<TemporalShiftMapping> parse_temporal_shift(const std::string& name) {
+  return parse_enum_name(kTemporalShiftNames, name, "temporal_shift");
+}
 
 // Replay, as the public T-GPT code: on the demo shot the path-space shift cost
 // 29 % more per sample and was worse at equal time (docs/benchmarks.md, T-GPT).
