@@ -121,3 +121,7 @@ echo "  video:    ${VIDEO:-none}"
 echo "  stats:    $OUT_ABS/stats.json"
 [ -n "$REPORT" ] && echo "  report:   $REPORT"
 echo "  server state (jobs, database, log): $(cd "$STATE" && pwd)"
+# The Python client runs from the build tree, where the build generated its gRPC stubs.
+if [ -d "$BUILD_DIR/python/gdvr_client/_proto" ]; then
+  echo "  Python client: PYTHONPATH=$(cd "$BUILD_DIR/python" && pwd) python3 -m gdvr_client --help"
+fi

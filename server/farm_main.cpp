@@ -130,12 +130,17 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
   if (ec) return fail(kExitFailed, "--out: cannot create '" + out_dir + "': " + ec.message());
   remove_temporaries_of_dead_writers(out_dir);
 
+  // One finalizer for the task: a T-GPT window is solved once for all of the
+  // task's frames it holds, not once per frame.
+  auto finalizer = JobFinalizer::create(job.spec);
+  if (!finalizer.ok()) return fail(finalizer.status());
+
   // Check every frame's inputs before the first output, so a finalize
   // scheduled too early fails at once and names everything still missing.
   std::set<int> needed;
   for (int f : frames)
     if (!fs::exists(fs::path(out_dir) / frame_file_name(f), ec))
-      for (int n : frames_needed_to_finalize(job.spec, job.frames, f)) needed.insert(n);
+      for (int n : finalizer.value()->frames_needed(f)) needed.insert(n);
   std::vector<std::string> missing;
   for (int n : needed) {
     BufferCheck c = check_buffers(job, buffers_dir, n);
@@ -168,12 +173,7 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
   std::map<int, FrameBuffers> loaded;
   std::map<int, int> last_use;
   for (int f : frames)
-    for (int n : frames_needed_to_finalize(job.spec, job.frames, f)) last_use[n] = f;
-
-  // One finalizer for the task: a T-GPT window is solved once for all of the
-  // task's frames it holds, not once per frame.
-  auto finalizer = JobFinalizer::create(job.spec);
-  if (!finalizer.ok()) return fail(finalizer.status());
+    for (int n : finalizer.value()->frames_needed(f)) last_use[n] = f;
   int finalized = 0, skipped = 0;
   for (int f : frames) {
     if (g_cancel) return fail(cancelled("cancelled"));
@@ -183,7 +183,7 @@ Failure cmd_finalize(const FarmJob& job, const std::vector<int>& frames, const s
       ++skipped;
       if (Status st = outputs.value()->complete_earlier_frame(f); !st.ok()) return fail(st);
     } else {
-      for (int n : frames_needed_to_finalize(job.spec, job.frames, f)) {
+      for (int n : finalizer.value()->frames_needed(f)) {
         if (loaded.count(n)) continue;
         auto fb = read_buffers(job, buffers_dir, n, f);
         if (!fb.ok())

@@ -577,7 +577,7 @@ void JobManager::write_stats_json(const Job& job) const {
   std::vector<WrittenFrame> frames;
   for (const auto& [f, rec] : job.final_frames) frames.push_back({rec.file, rec.size, from_proto(rec.stats)});
   std::vector<std::pair<std::string, std::string>> header = {
-      {"job_id", job.id}, {"integrator", job.core.integrator}, {"state", job_state_name(job.state)}};
+      {"job_id", job.id}, {"integrator", integrator_name(job.core.integrator)}, {"state", job_state_name(job.state)}};
   if (!job.reason.empty()) header.push_back({"reason", job.reason});
   (void)write_text_atomic(job_dir(job.id) + "/stats.json", stats_json(header, int(job.frames.size()), frames));
 }

@@ -2,26 +2,20 @@
 //   gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]
 //       [--frames A-B] [--threads N] [--seed N] [--integrator pt]
 //       [--width W --height H] [--param NAME=VALUE ...]
-// Writes what the job's outputs block asks for, as the server and gdvr-farm
+// (the flags shared with gdvr-report: core/job/job_flags.h). Writes what the job's outputs block asks for, as the server and gdvr-farm
 // finalize do (core/job/job_outputs.h): DIR/frame_0000.exr ..., previews, the
 // video and stats.json. Ctrl-C cancels cleanly.
 #include <atomic>
 #include <chrono>
-#include <cmath>
-#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
-#include <sstream>
 #include <string>
+#include <vector>
 
-#include "core/gradient/gpt_settings.h"
 #include "core/io/atomic_file.h"
+#include "core/job/job_flags.h"
 #include "core/job/job_outputs.h"
 #include "core/job/job_runner.h"
-#include "core/recon/recon_settings.h"
-#include "core/temporal/tgpt_settings.h"
 #include "core/job/job_spec.h"
 #include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
@@ -40,8 +34,6 @@ int usage(const char* msg) {
       "Flags override the job file; values are checked with the job (errors name the field).\n");
 }
 
-using gdvr::tools::parse_int;
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -49,94 +41,28 @@ int main(int argc, char** argv) {
   using namespace gdvr;
   namespace fs = std::filesystem;
   if (argc < 2) return usage(nullptr);
-  std::string input, out_dir;
-  JobSpec job;
-  bool have_frames = false;
-  JobSpec overrides;
-  int threads = 0;
-  bool seed_set = false, integrator_set = false, alpha_set = false, keep_negative = false;
-  std::string shift, temporal_shift, recon;
-  int window = 0;
-  std::map<std::string, std::string> params;
-
+  tools::JobFlags flags;
   for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    auto next = [&](const char* name) -> const char* {
-      if (i + 1 >= argc) {
-        usage((std::string(name) + " needs a value").c_str());
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    long long v = 0;
-    if (a == "--out") out_dir = next("--out");
-    else if (a == "--spp") { if (!parse_int(next("--spp"), 1, 1 << 24, &v)) return usage("--spp: expected 1..16777216"); overrides.spp = int(v); }
-    else if (a == "--time-budget") {
-      if (!gdvr::tools::parse_number(next("--time-budget"), 0, 1e9, &overrides.time_budget_s) || !(overrides.time_budget_s > 0))
-        return usage("--time-budget: expected a positive number of seconds");
-    }
-    else if (a == "--frames") { overrides.frames = next("--frames"); have_frames = true; }
-    else if (a == "--threads") { if (!parse_int(next("--threads"), 1, 1024, &v)) return usage("--threads: expected 1..1024"); threads = int(v); }
-    else if (a == "--seed") { if (!parse_int(next("--seed"), 0, (1LL << 62), &v)) return usage("--seed: expected a non-negative integer"); overrides.seed = uint64_t(v); seed_set = true; }
-    else if (a == "--integrator") { overrides.integrator = next("--integrator"); integrator_set = true; }
-    else if (a == "--shift") shift = next("--shift");
-    else if (a == "--temporal-shift") temporal_shift = next("--temporal-shift");
-    else if (a == "--recon") recon = next("--recon");
-    else if (a == "--keep-negative") keep_negative = true;
-    else if (a == "--alpha") {
-      const char* text = next("--alpha");
-      char* end = nullptr;
-      overrides.reconstruction.alpha = std::strtod(text, &end);
-      if (end == text || *end != '\0' || !(overrides.reconstruction.alpha >= 0) || !std::isfinite(overrides.reconstruction.alpha))
-        return usage("--alpha: expected a finite number >= 0");
-      alpha_set = true;
-    }
-    else if (a == "--window") { if (!parse_int(next("--window"), 1, 1000, &v)) return usage("--window: expected 1..1000"); window = int(v); }
-    else if (a == "--width") { if (!parse_int(next("--width"), 1, 16384, &v)) return usage("--width: expected 1..16384"); overrides.width = int(v); }
-    else if (a == "--height") { if (!parse_int(next("--height"), 1, 16384, &v)) return usage("--height: expected 1..16384"); overrides.height = int(v); }
-    else if (a == "--param" || a == "-D") {
-      if (!gdvr::tools::parse_param(next("--param"), &params)) return usage("--param: expected NAME=VALUE");
-    } else if (a == "-h" || a == "--help") return usage(nullptr);
-    else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
-    else if (input.empty()) input = a;
-    else return usage(("unexpected argument " + a).c_str());
+    auto taken = tools::take_job_flag(argc, argv, &i, {/* sampling = */ true, /* integrator = */ true}, &flags);
+    if (!taken.ok()) return usage(taken.status().message().c_str());
+    if (taken.value()) continue;
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") return usage(nullptr);
+    return usage(("unknown option " + a).c_str());
   }
-  if (input.empty()) return usage("no scene or job file given");
-  // The same names the job file accepts (checked here too: a pt job ignores them).
-  if (!shift.empty() && !parse_shift_mapping(shift).ok()) return usage(parse_shift_mapping(shift).status().message().c_str());
-  if (!temporal_shift.empty() && !parse_temporal_shift(temporal_shift).ok())
-    return usage(parse_temporal_shift(temporal_shift).status().message().c_str());
-  if (!recon.empty() && !parse_recon_method(recon).ok()) return usage(parse_recon_method(recon).status().message().c_str());
-  if (out_dir.empty()) return usage("--out DIR is required");
+  if (flags.input.empty()) return usage("no scene or job file given");
+  if (flags.out_dir.empty()) return usage("--out DIR is required");
+  const std::string& input = flags.input;
+  const std::string& out_dir = flags.out_dir;
 
   JobRunOptions options;
-  options.threads = threads;
-  if (fs::path(input).extension() == ".json") {
-    std::ifstream in(input);
-    if (!in) { std::fprintf(stderr, "gdvr-render: cannot read %s\n", input.c_str()); return 1; }
-    std::stringstream ss;
-    ss << in.rdbuf();
-    auto parsed = parse_job_json(ss.str(), input);
-    if (!parsed.ok()) { std::fprintf(stderr, "gdvr-render: %s\n", parsed.status().to_string().c_str()); return 1; }
-    job = std::move(parsed.value());
-    options.base_dir = fs::absolute(input).parent_path().string();
-  } else {
-    job.scene = fs::absolute(input).string();
+  options.threads = flags.threads;
+  auto flagged_job = tools::job_from_flags(flags, &options.base_dir);
+  if (!flagged_job.ok()) {
+    std::fprintf(stderr, "gdvr-render: %s\n", flagged_job.status().to_string().c_str());
+    return 1;
   }
-  if (overrides.spp) job.spp = overrides.spp;
-  if (overrides.time_budget_s > 0) job.time_budget_s = overrides.time_budget_s;
-  if (have_frames) job.frames = overrides.frames;
-  if (overrides.width) job.width = overrides.width;
-  if (overrides.height) job.height = overrides.height;
-  if (seed_set) job.seed = overrides.seed;
-  if (integrator_set) job.integrator = overrides.integrator;
-  if (!shift.empty()) job.shift = shift;
-  if (!temporal_shift.empty()) job.temporal_shift = temporal_shift;
-  if (!recon.empty()) job.reconstruction.method = recon;
-  if (alpha_set) job.reconstruction.alpha = overrides.reconstruction.alpha;
-  if (window > 0) job.reconstruction.window = window;
-  if (keep_negative) job.reconstruction.clamp_negative = false;
-  for (auto& [k, val] : params) job.params[k] = val;
+  const JobSpec job = std::move(flagged_job.value());
 
   std::error_code ec;
   fs::create_directories(out_dir, ec);
@@ -160,8 +86,9 @@ int main(int argc, char** argv) {
   std::vector<WrittenFrame> written;
   Status write_status;
   auto write_stats = [&](const Status& st) {
-    std::vector<std::pair<std::string, std::string>> header = {{"input", input}, {"integrator", job.integrator},
-                                                               {"state", st.ok() ? "completed" : status_code_name(st.code())}};
+    std::vector<std::pair<std::string, std::string>> header = {
+        {"input", input}, {"integrator", integrator_name(job.integrator)},
+        {"state", st.ok() ? "completed" : status_code_name(st.code())}};
     if (!st.ok()) header.push_back({"reason", st.message()});
     return write_text_atomic((fs::path(out_dir) / "stats.json").string(), stats_json(header, int(frame_list->size()), written));
   };

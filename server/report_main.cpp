@@ -2,6 +2,7 @@
 //   gdvr-report JOB.json|SCENE.xml --out DIR [--reference REF.exr|ref_%04d.exr]
 //       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]
 //       [--threads N] [--width W --height H] [--seed N] [--param NAME=VALUE ...]
+// (the flags shared with gdvr-render: core/job/job_flags.h)
 // Renders PT, G-PT (L1, L2, weighted) and, for animations, T-GPT (L1, L2) at
 // equal time budgets per frame against a reference (rendered with PT and
 // cached in DIR/reference/, or supplied) and writes DIR/results.csv,
@@ -11,12 +12,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <string>
 
 #include "core/io/color_transform.h"
 #include "core/io/shipped_ocio_config.h"
+#include "core/job/job_flags.h"
 #include "core/report/error_time_report.h"
 #include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
@@ -53,13 +54,12 @@ int main(int argc, char** argv) {
   gdvr::retain_freed_memory_for_reuse();  // core/util/memory_tuning.h: batch tool
   using namespace gdvr;
   if (argc < 2) return usage(nullptr);
-  std::string input;
   ErrorTimeReportOptions o;
-  JobSpec overrides;
-  bool have_frames = false, seed_set = false;
-  std::map<std::string, std::string> params;
-
+  tools::JobFlags flags;
   for (int i = 1; i < argc; ++i) {
+    auto taken = tools::take_job_flag(argc, argv, &i, tools::JobFlagSet{}, &flags);
+    if (!taken.ok()) return usage(taken.status().message().c_str());
+    if (taken.value()) continue;
     std::string a = argv[i];
     auto next = [&](const char* name) -> std::string {
       if (i + 1 >= argc) {
@@ -69,8 +69,7 @@ int main(int argc, char** argv) {
       return argv[++i];
     };
     long long v = 0;
-    if (a == "--out") o.out_dir = next("--out");
-    else if (a == "--reference") o.reference = next("--reference");
+    if (a == "--reference") o.reference = next("--reference");
     else if (a == "--budgets") {
       o.budgets.clear();
       for (const std::string& b : split(next("--budgets"), ',')) {
@@ -84,45 +83,30 @@ int main(int argc, char** argv) {
         }
       }
       if (o.budgets.empty()) return usage("--budgets: expected seconds per frame, e.g. 0.5,1,2");
-    } else if (a == "--frames") { overrides.frames = next("--frames"); have_frames = true; }
-    else if (a == "--reference-spp") { if (!parse_int(next("--reference-spp"), 1, 1 << 20, &v)) return usage("--reference-spp: expected 1..1048576"); o.reference_spp = int(v); }
-    else if (a == "--methods") o.methods = split(next("--methods"), ',');
-    else if (a == "--threads") { if (!parse_int(next("--threads"), 1, 1024, &v)) return usage("--threads: expected 1..1024"); o.run.threads = int(v); }
-    else if (a == "--width") { if (!parse_int(next("--width"), 1, 16384, &v)) return usage("--width: expected 1..16384"); overrides.width = int(v); }
-    else if (a == "--height") { if (!parse_int(next("--height"), 1, 16384, &v)) return usage("--height: expected 1..16384"); overrides.height = int(v); }
-    else if (a == "--seed") { if (!parse_int(next("--seed"), 0, (1LL << 62), &v)) return usage("--seed: expected a non-negative integer"); overrides.seed = uint64_t(v); seed_set = true; }
-    else if (a == "--param" || a == "-D") {
-      if (!gdvr::tools::parse_param(next("--param"), &params)) return usage("--param: expected NAME=VALUE");
-    } else if (a == "-h" || a == "--help") return usage(nullptr);
-    else if (!a.empty() && a[0] == '-') return usage(("unknown option " + a).c_str());
-    else if (input.empty()) input = a;
-    else return usage(("unexpected argument " + a).c_str());
+    } else if (a == "--reference-spp") {
+      if (!parse_int(next("--reference-spp"), 1, kMaxJobSpp, &v))
+        return usage(("--reference-spp: expected 1.." + std::to_string(kMaxJobSpp)).c_str());
+      o.reference_spp = int(v);
+    } else if (a == "--methods") o.methods = split(next("--methods"), ',');
+    else if (a == "-h" || a == "--help") return usage(nullptr);
+    else return usage(("unknown option " + a).c_str());
   }
-  if (input.empty()) return usage("no scene or job file given");
-  if (o.out_dir.empty()) return usage("--out DIR is required");
+  if (flags.input.empty()) return usage("no scene or job file given");
+  if (flags.out_dir.empty()) return usage("--out DIR is required");
+  const std::string& input = flags.input;
+  o.out_dir = flags.out_dir;
+  o.run.threads = flags.threads;
 
-  JobSpec& job = o.job;
-  if (fs::path(input).extension() == ".json") {
-    std::ifstream in(input);
-    if (!in) { std::fprintf(stderr, "gdvr-report: cannot read %s\n", input.c_str()); return 1; }
-    std::stringstream ss;
-    ss << in.rdbuf();
-    auto parsed = parse_job_json(ss.str(), input);
-    if (!parsed.ok()) { std::fprintf(stderr, "gdvr-report: %s\n", parsed.status().to_string().c_str()); return 1; }
-    job = std::move(parsed.value());
-    o.run.base_dir = fs::absolute(input).parent_path().string();
-    // A job that names its reference: relative to the job file.
-    if (o.reference.empty() && !job.reference.empty())
-      o.reference = fs::path(job.reference).is_relative() ? (fs::path(o.run.base_dir) / job.reference).string()
-                                                          : job.reference;
-  } else {
-    job.scene = fs::absolute(input).string();
+  auto job = tools::job_from_flags(flags, &o.run.base_dir);
+  if (!job.ok()) {
+    std::fprintf(stderr, "gdvr-report: %s\n", job.status().to_string().c_str());
+    return 1;
   }
-  if (have_frames) job.frames = overrides.frames;
-  if (overrides.width) job.width = overrides.width;
-  if (overrides.height) job.height = overrides.height;
-  if (seed_set) job.seed = overrides.seed;
-  for (auto& [k, val] : params) job.params[k] = val;
+  o.job = std::move(job.value());
+  // A job that names its reference: relative to the job file.
+  if (o.reference.empty() && !o.job.reference.empty() && !o.run.base_dir.empty())
+    o.reference = fs::path(o.job.reference).is_relative() ? (fs::path(o.run.base_dir) / o.job.reference).string()
+                                                          : o.job.reference;
   o.input_name = input;
   o.ocio_config = resolve_ocio_config_path(find_shipped_ocio_config());
 

@@ -1,17 +1,26 @@
 #!/usr/bin/env bash
-# Regenerates gdvr_client/_proto from proto/ with the system protoc and
-# grpc_python_plugin (Debian protobuf-compiler, protobuf-compiler-grpc), so the
-# package installs offline without grpcio-tools. The output is committed;
-# ctest's python_stubs_fresh checks it matches the .proto files.
-#   generate_stubs.sh [OUT_DIR]   (default: gdvr_client/_proto next to this script)
+# Generates the Python client's gRPC stubs (the package gdvr_client._proto)
+# from proto/gdvr/v1/*.proto with the system protoc and grpc_python_plugin
+# (Debian protobuf-compiler, protobuf-compiler-grpc), so the client builds
+# offline without grpcio-tools (Debian's python3-grpc-tools is grpcio-tools
+# 1.14, whose protoc predates proto3 `optional`). The stubs are never
+# committed: the CMake build writes them into build/python (next to a copy of
+# the package, for the tests and the demo), and `pip install client/python`
+# into the installed package (setup.py).
+#   generate_stubs.sh OUT_DIR   (the _proto folder to write; replaced)
+# Environment: PROTOC, GRPC_PYTHON_PLUGIN override the tools found on PATH.
 set -euo pipefail
+[ $# -eq 1 ] || { echo "usage: generate_stubs.sh OUT_DIR" >&2; exit 2; }
 here="$(cd "$(dirname "$0")" && pwd)"
 proto_root="$here/../../proto"
-out="${1:-$here/gdvr_client/_proto}"
+out="$1"
+protoc="${PROTOC:-protoc}"
+plugin="${GRPC_PYTHON_PLUGIN:-$(command -v grpc_python_plugin || true)}"
+[ -n "$plugin" ] || { echo "generate_stubs.sh: grpc_python_plugin not found (Debian: protobuf-compiler-grpc)" >&2; exit 1; }
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-protoc --proto_path="$proto_root" --python_out="$tmp" --grpc_out="$tmp" \
-  --plugin=protoc-gen-grpc="$(command -v grpc_python_plugin)" \
+"$protoc" --proto_path="$proto_root" --python_out="$tmp" --grpc_out="$tmp" \
+  --plugin=protoc-gen-grpc="$plugin" \
   "$proto_root"/gdvr/v1/*.proto
 # protoc writes absolute imports ("from gdvr.v1 import ..."); make them
 # package-relative so the stubs live inside gdvr_client.

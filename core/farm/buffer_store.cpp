@@ -122,7 +122,7 @@ Status write_job_stats(const FarmJob& job, const std::string& buffers_dir, const
   }
   const bool complete = final_frames.size() == job.frames.size();
   const std::string text = stats_json(
-      {{"job", job.path}, {"integrator", job.spec.integrator}, {"state", complete ? "completed" : "partial"}},
+      {{"job", job.path}, {"integrator", integrator_name(job.spec.integrator)}, {"state", complete ? "completed" : "partial"}},
       int(job.frames.size()), final_frames);
   // A rerun that finalizes nothing leaves the folder untouched, mtimes included.
   const fs::path path = fs::path(out_dir) / "stats.json";

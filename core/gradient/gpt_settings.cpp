@@ -5,21 +5,6 @@
 
 namespace gdvr {
 
-const char* shift_mapping_name(ShiftMapping m) {
-  switch (m) {
-    case ShiftMapping::kReplay: return "replay";
-    case ShiftMapping::kReconnect: return "reconnect";
-    case ShiftMapping::kHybrid: return "hybrid";
-  }
-  return "?";
-}
-
-Expected<ShiftMapping> parse_shift_mapping(const std::string& name) {
-  for (ShiftMapping m : {ShiftMapping::kReplay, ShiftMapping::kReconnect, ShiftMapping::kHybrid})
-    if (name == shift_mapping_name(m)) return m;
-  return invalid_argument("shift: unknown '" + name + "' (expected replay, reconnect or hybrid)");
-}
-
 GptSettings GptSettings::defaults_for(ShiftMapping shift) {
   GptSettings s;
   s.shift = shift;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/recon/recon_settings.h"
+#include "core/util/enum_names.h"
 #include "core/util/status.h"
 
 namespace gdvr {
@@ -19,11 +20,20 @@ enum class ShiftMapping {
   kHybrid,     // replay until the first diffuse-diffuse pair, then reconnect
 };
 
-const char* shift_mapping_name(ShiftMapping m);
-Expected<ShiftMapping> parse_shift_mapping(const std::string& name);
+// The spellings of job files and flags ("shift", --shift).
+inline constexpr EnumNames<ShiftMapping, 3> kShiftMappingNames = {{{ShiftMapping::kReplay, "replay"},
+                                                                   {ShiftMapping::kReconnect, "reconnect"},
+                                                                   {ShiftMapping::kHybrid, "hybrid"}}};
+inline const char* shift_mapping_name(ShiftMapping m) { return enum_name(kShiftMappingNames, m); }
+inline Expected<ShiftMapping> parse_shift_mapping(const std::string& name) {
+  return parse_enum_name(kShiftMappingNames, name, "shift");
+}
+
+// The G-PT paper's choice and every job's default.
+inline constexpr ShiftMapping kDefaultShiftMapping = ShiftMapping::kReconnect;
 
 struct GptSettings {
-  ShiftMapping shift = ShiftMapping::kReconnect;
+  ShiftMapping shift = kDefaultShiftMapping;
   // Cached-path shifting with Russian roulette (§3.3): build the offsets with
   // probability q = max(min(1, lum f(x)), q_min) and divide by q.
   bool cached_rr = true;

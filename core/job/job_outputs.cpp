@@ -265,7 +265,8 @@ LayeredImage JobOutputs::selected_layers(const LayeredImage& image, std::vector<
     if (l.name.empty() || std::find(selected.begin(), selected.end(), l.name) != selected.end()) kept.layers.push_back(l);
   for (const std::string& name : selected)
     if (!image.find(name))
-      left_out->push_back("EXR layer '" + name + "': integrator " + job_.integrator + " does not produce it");
+      left_out->push_back("EXR layer '" + name + "': integrator " + integrator_name(job_.integrator) +
+                          " does not produce it");
   return kept;
 }
 

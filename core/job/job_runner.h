@@ -12,39 +12,11 @@
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/job/frame_output.h"
 #include "core/job/job_spec.h"
 #include "core/util/status.h"
 
 namespace gdvr {
-
-struct FrameStats {
-  int frame = 0;
-  double render_seconds = 0;
-  double reconstruct_seconds = 0;
-  // The feature buffers (albedo, N, Z; core/render/feature_buffers.h): a fixed
-  // cost on top of render_seconds, outside the time budget; 0 when the job's
-  // outputs.exr_layers selects none of them (they are not rendered then).
-  double feature_seconds = 0;
-  int spp = 0;
-  uint64_t samples = 0;        // camera samples
-  uint64_t rays = 0;           // every ray traced (closest hit and shadow)
-  // Rays whose results enter a non-zero temporal gradient (tgpt): motion
-  // vectors and temporal offsets. 0 for pt, gpt and static frame pairs.
-  uint64_t temporal_rays = 0;
-  double samples_per_second = 0;
-  double rays_per_second = 0;
-  std::vector<std::string> left_out;  // what the pipeline skipped, and why
-  // Filled by the output stage (core/job/job_outputs.h):
-  double rel_mse = -1;             // per-pixel relMSE against the job's reference; -1: none
-  double rel_mse_global = -1;      // global relMSE against it; -1: none
-  double shift_failure_rate = -1;  // mean of the shift_failure_rate layer; -1: not gradient-domain
-};
-
-struct FrameOutput {
-  int frame = 0;
-  LayeredImage image;  // unnamed layer = the final RGB image
-  FrameStats stats;
-};
 
 struct JobProgress {
   int frames_done = 0;
@@ -69,7 +41,9 @@ struct JobCallbacks {
 Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallbacks& callbacks,
                const std::atomic<bool>* cancel);
 
-// Validates a job (scene loads, frame range parses, values in range) without rendering.
+// Validates a job without rendering: its values (validate in
+// core/job/job_validation.h), the integrator's settings, and the scene with
+// the job's params and tracks.
 Status validate_job(const JobSpec& job, const JobRunOptions& options);
 
 // What a job will render once the scene file and the job's <default>
@@ -101,12 +75,6 @@ Expected<ResolvedRender> resolve_job(const JobSpec& job, const JobRunOptions& op
 //      produces before reconstruction (pt: the image; gpt: primal, dx, dy, ...);
 //   2. finalize: buffers -> the final frame (reconstruction, direct light added).
 
-struct FrameBuffers {
-  int frame = 0;
-  LayeredImage layers;
-  FrameStats stats;  // render-stage statistics; finalize adds its own
-};
-
 // Renders `frames` (a subset of the job's frames, in any order) and hands each
 // frame's buffers to `on_buffers`; a non-ok Status from it stops the run.
 Status render_job_buffers(const JobSpec& job, const JobRunOptions& options, const std::vector<int>& frames,
@@ -121,7 +89,7 @@ std::vector<int> frames_needed_to_finalize(const JobSpec& job, const std::vector
 // Stage 2 for one frame. `buffers` must hold frames_needed_to_finalize(frame).
 Expected<FrameOutput> finalize_frame(const JobSpec& job, int frame, const std::map<int, FrameBuffers>& buffers);
 
-class TemporalWindowCache;
+class IntegratorRunner;
 
 // Stage 2 for several frames of one job in one process (a farm's finalize
 // task): each output is finalize_frame's, bit for bit, but what neighbouring
@@ -138,16 +106,16 @@ class JobFinalizer {
   JobFinalizer(const JobFinalizer&) = delete;
   JobFinalizer& operator=(const JobFinalizer&) = delete;
 
-  // `buffers` must hold frames_needed_to_finalize(frame).
+  // The frames whose buffers finalizing `frame` reads.
+  std::vector<int> frames_needed(int frame) const;
+  // `buffers` must hold frames_needed(frame).
   Expected<FrameOutput> finalize(int frame, const std::map<int, FrameBuffers>& buffers);
   // Reconstruction windows solved so far (0 for pt and gpt, which have none).
   int windows_solved() const;
 
  private:
-  JobFinalizer() = default;
-  JobSpec job_;
-  std::vector<int> frames_;                        // the job's frames (tgpt)
-  std::unique_ptr<TemporalWindowCache> windows_;  // tgpt only
+  explicit JobFinalizer(std::unique_ptr<IntegratorRunner> runner);
+  std::unique_ptr<IntegratorRunner> runner_;
 };
 
 }  // namespace gdvr

@@ -15,6 +15,7 @@
 #include <limits>
 #include <set>
 
+#include "core/job/job_validation.h"
 #include "core/util/echo_text.h"
 
 namespace gdvr {
@@ -130,11 +131,37 @@ class JsonReader {
     return Status::Ok();
   }
 
+  // A name from the enum's table; the error lists the table's names.
+  template <typename Enum, size_t N>
+  Status get_name(const json& j, const std::string& path, const EnumNames<Enum, N>& names, Enum* out) const {
+    std::string name;
+    GDVR_RETURN_IF_ERROR(get(j, path, &name));
+    std::optional<Enum> v = enum_from_name(names, name);
+    if (!v) return error(path, "must be " + enum_name_list(names) + ", not '" + echo_text(name) + "'");
+    *out = *v;
+    return Status::Ok();
+  }
+
   template <typename T>
   Status opt(const json& obj, const char* key, const std::string& path, T* out) const {
     auto it = obj.find(key);
     if (it == obj.end() || it->is_null()) return Status::Ok();
     return get(*it, path + "." + key, out);
+  }
+  Status opt(const json& obj, const char* key, const std::string& path, std::optional<int>* out) const {
+    auto it = obj.find(key);
+    if (it == obj.end() || it->is_null()) return Status::Ok();
+    int v = 0;
+    GDVR_RETURN_IF_ERROR(get(*it, path + "." + key, &v));
+    *out = v;
+    return Status::Ok();
+  }
+  template <typename Enum, size_t N>
+  Status opt_name(const json& obj, const char* key, const std::string& path, const EnumNames<Enum, N>& names,
+                  Enum* out) const {
+    auto it = obj.find(key);
+    if (it == obj.end() || it->is_null()) return Status::Ok();
+    return get_name(*it, path + "." + key, names, out);
   }
 
  private:
@@ -328,55 +355,24 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   GDVR_RETURN_IF_ERROR(r.opt(j, "spp", p, &job.spp));
   GDVR_RETURN_IF_ERROR(r.opt(j, "time_budget_s", p, &job.time_budget_s));
   GDVR_RETURN_IF_ERROR(r.opt(j, "seed", p, &job.seed));
-  GDVR_RETURN_IF_ERROR(r.opt(j, "integrator", p, &job.integrator));
-  GDVR_RETURN_IF_ERROR(r.opt(j, "shift", p, &job.shift));
-  GDVR_RETURN_IF_ERROR(r.opt(j, "temporal_shift", p, &job.temporal_shift));
+  GDVR_RETURN_IF_ERROR(r.opt_name(j, "integrator", p, kIntegratorNames, &job.integrator));
+  GDVR_RETURN_IF_ERROR(r.opt_name(j, "shift", p, kShiftMappingNames, &job.shift));
+  GDVR_RETURN_IF_ERROR(r.opt_name(j, "temporal_shift", p, kTemporalShiftNames, &job.temporal_shift));
   GDVR_RETURN_IF_ERROR(r.opt(j, "priority", p, &job.priority));
   GDVR_RETURN_IF_ERROR(r.opt(j, "reference", p, &job.reference));
-
-  // ---- Range checks (before tracks: keyframe `frame` needs a valid fps) ----
-  if (job.scene.empty()) return r.error(p + ".scene", "missing");
-  if (!(job.fps > 0) || job.fps > 1000) return r.error(p + ".fps", "must be in (0, 1000]");
-  if (job.width < 0 || job.width > 16384) return r.error(p + ".width", "must be in [0, 16384] (0: the scene's)");
-  if (job.height < 0 || job.height > 16384) return r.error(p + ".height", "must be in [0, 16384] (0: the scene's)");
-  if (job.spp < 0 || job.spp > (1 << 20)) return r.error(p + ".spp", "must be in [0, 2^20] (0: the scene's)");
-  if (job.time_budget_s < 0) return r.error(p + ".time_budget_s", "must be >= 0");
-  if (job.integrator != "pt" && job.integrator != "gpt" && job.integrator != "tgpt")
-    return r.error(p + ".integrator", "must be pt, gpt or tgpt, not '" + echo_text(job.integrator) + "'");
-  if (job.shift != "replay" && job.shift != "reconnect" && job.shift != "hybrid")
-    return r.error(p + ".shift", "must be replay, reconnect or hybrid, not '" + echo_text(job.shift) + "'");
-  if (job.temporal_shift != "replay" && job.temporal_shift != "reconnect")
-    return r.error(p + ".temporal_shift", "must be replay or reconnect, not '" + echo_text(job.temporal_shift) + "'");
-  {
-    // A range over the frame limit keeps its RESOURCE_EXHAUSTED code.
-    auto frames = parse_frame_range(job.frames);
-    if (!frames.ok()) {
-      Status st = r.error(p + ".frames", frames.status().message());
-      return Status(frames.status().code(), st.message());
-    }
-  }
 
   if (j.contains("reconstruction")) {
     const json& rj = j["reconstruction"];
     std::string rp = p + ".reconstruction";
     GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"method", "alpha", "window", "term_weights", "clamp_negative"}));
     ReconstructionSpec& rs = job.reconstruction;
-    GDVR_RETURN_IF_ERROR(r.opt(rj, "method", rp, &rs.method));
+    GDVR_RETURN_IF_ERROR(r.opt_name(rj, "method", rp, kReconMethodNames, &rs.method));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "alpha", rp, &rs.alpha));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "window", rp, &rs.window));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "clamp_negative", rp, &rs.clamp_negative));
     if (rj.contains("term_weights") && !rj["term_weights"].is_null() &&
-        !(rj["term_weights"].is_array() && rj["term_weights"].empty())) {  // protobuf JSON: [] or absent = unset
-      GDVR_RETURN_IF_ERROR(r.get_vec(rj["term_weights"], rp + ".term_weights", 6, &rs.term_weights));
-      for (size_t k = 0; k < rs.term_weights.size(); ++k)
-        if (!(rs.term_weights[k] >= 0) || !std::isfinite(rs.term_weights[k]) || rs.term_weights[k] > 1e6)
-          return r.error(rp + ".term_weights[" + std::to_string(k) + "]", "must be in [0, 1e6]");
-      if (rs.term_weights[0] == 0) return r.error(rp + ".term_weights[0]", "the primal's weight must be positive");
-    }
-    if (rs.method != "l1" && rs.method != "l2" && rs.method != "uniform" && rs.method != "weighted" && rs.method != "none")
-      return r.error(rp + ".method", "must be l1, l2, uniform, weighted or none, not '" + echo_text(rs.method) + "'");
-    if (!(rs.alpha >= 0)) return r.error(rp + ".alpha", "must be >= 0");
-    if (rs.window < 1 || rs.window > 1000) return r.error(rp + ".window", "must be in [1, 1000]");
+        !(rj["term_weights"].is_array() && rj["term_weights"].empty()))  // protobuf JSON: [] or absent = unset
+      GDVR_RETURN_IF_ERROR(r.get_vec(rj["term_weights"], rp + ".term_weights", kTermCount, &rs.term_weights));
   }
   if (j.contains("direct_light")) {
     const json& dj = j["direct_light"];
@@ -384,14 +380,6 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
     GDVR_RETURN_IF_ERROR(r.check_object(dj, dp, {"strata", "edge_strata"}));
     GDVR_RETURN_IF_ERROR(r.opt(dj, "strata", dp, &job.direct_light.strata));
     GDVR_RETURN_IF_ERROR(r.opt(dj, "edge_strata", dp, &job.direct_light.edge_strata));
-    // -1 is JobSpec's "unset" (the integrator's default); a job file leaves
-    // the field out for that, so an explicit negative value is an error.
-    auto given = [&](const char* key) { return dj.contains(key) && !dj[key].is_null(); };
-    if (given("strata") && (job.direct_light.strata < 0 || job.direct_light.strata > 64))
-      return r.error(dp + ".strata", "must be in [0, 64] (0: from the paths' own samples; leave it out for the "
-                                     "integrator's default)");
-    if (given("edge_strata") && (job.direct_light.edge_strata < 0 || job.direct_light.edge_strata > 64))
-      return r.error(dp + ".edge_strata", "must be in [0, 64] (leave it out for the integrator's default)");
   }
   if (j.contains("params")) {
     const json& pj = j["params"];
@@ -405,13 +393,6 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
       job.params[it.key()] = v;
     }
   }
-  if (j.contains("animation") && j.contains("tracks")) return r.error(p, "give tracks under 'animation' or at the top level, not both");
-  if (j.contains("animation")) {
-    const json& aj = j["animation"];
-    GDVR_RETURN_IF_ERROR(r.check_object(aj, p + ".animation", {"tracks"}));
-    if (aj.contains("tracks")) GDVR_RETURN_IF_ERROR(parse_tracks(r, aj["tracks"], p + ".animation.tracks", job.fps, &job.animation));
-  }
-  if (j.contains("tracks")) GDVR_RETURN_IF_ERROR(parse_tracks(r, j["tracks"], p + ".tracks", job.fps, &job.animation));
   if (j.contains("outputs")) {
     const json& oj = j["outputs"];
     std::string op = p + ".outputs";
@@ -430,9 +411,16 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
     GDVR_RETURN_IF_ERROR(r.opt(oj, "video_codec", op, &o.video_codec));
     GDVR_RETURN_IF_ERROR(r.opt(oj, "ocio_display", op, &o.ocio_display));
     GDVR_RETURN_IF_ERROR(r.opt(oj, "ocio_view", op, &o.ocio_view));
-    if (o.video_codec != "h264" && o.video_codec != "prores" && o.video_codec != "ffv1" && o.video_codec != "none")
-      return r.error(op + ".video_codec", "must be h264, prores, ffv1 or none, not '" + echo_text(o.video_codec) + "'");
   }
+  // Values, before the tracks: a keyframe's `frame` converts with the fps.
+  if (Status st = validate(job); !st.ok()) return Status(st.code(), origin + ": " + st.message());
+  if (j.contains("animation") && j.contains("tracks")) return r.error(p, "give tracks under 'animation' or at the top level, not both");
+  if (j.contains("animation")) {
+    const json& aj = j["animation"];
+    GDVR_RETURN_IF_ERROR(r.check_object(aj, p + ".animation", {"tracks"}));
+    if (aj.contains("tracks")) GDVR_RETURN_IF_ERROR(parse_tracks(r, aj["tracks"], p + ".animation.tracks", job.fps, &job.animation));
+  }
+  if (j.contains("tracks")) GDVR_RETURN_IF_ERROR(parse_tracks(r, j["tracks"], p + ".tracks", job.fps, &job.animation));
   return job;
 }
 
@@ -447,17 +435,17 @@ std::string job_to_json(const JobSpec& job) {
   j["time_budget_s"] = job.time_budget_s;
   // Protobuf JSON spells uint64 as a string; parse_job_json reads both.
   j["seed"] = std::to_string(job.seed);
-  j["integrator"] = job.integrator;
-  j["shift"] = job.shift;
-  j["temporal_shift"] = job.temporal_shift;
-  j["reconstruction"] = {{"method", job.reconstruction.method},
+  j["integrator"] = integrator_name(job.integrator);
+  j["shift"] = shift_mapping_name(job.shift);
+  j["temporal_shift"] = temporal_shift_name(job.temporal_shift);
+  j["reconstruction"] = {{"method", recon_method_name(job.reconstruction.method)},
                          {"alpha", job.reconstruction.alpha},
                          {"window", job.reconstruction.window},
                          {"clamp_negative", job.reconstruction.clamp_negative}};
   if (!job.reconstruction.term_weights.empty()) j["reconstruction"]["term_weights"] = job.reconstruction.term_weights;
   j["direct_light"] = json::object();
-  if (job.direct_light.strata >= 0) j["direct_light"]["strata"] = job.direct_light.strata;
-  if (job.direct_light.edge_strata >= 0) j["direct_light"]["edge_strata"] = job.direct_light.edge_strata;
+  if (job.direct_light.strata) j["direct_light"]["strata"] = *job.direct_light.strata;
+  if (job.direct_light.edge_strata) j["direct_light"]["edge_strata"] = *job.direct_light.edge_strata;
   j["params"] = json::object();
   for (const auto& [k, v] : job.params) j["params"][k] = v;
   json tracks = json::array();

@@ -6,31 +6,38 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "core/gradient/gpt_settings.h"
+#include "core/job/integrators/integrator.h"
+#include "core/job/job_defaults.h"
+#include "core/recon/recon_settings.h"
 #include "core/scene/animation.h"
+#include "core/temporal/tgpt_settings.h"
 #include "core/util/status.h"
 
 namespace gdvr {
 
 struct ReconstructionSpec {
-  std::string method = "l1";  // l1 | l2 | uniform | weighted | none
-  double alpha = 0.2;
-  int window = 20;            // frames in the temporal sliding window
+  ReconMethod method = kDefaultJobReconMethod;
+  double alpha = kDefaultReconAlpha;
+  int window = kDefaultWindowFrames;  // frames in the temporal sliding window
   // Extra weight per term (primal, dx, dy, dt, dxdt, dydt); empty = all 1.
   // 0 drops a term (e.g. {1, 1, 1, 0, 0, 0}: a window without temporal terms).
   std::vector<double> term_weights;
-  // The gradient-domain integrators' output clamped at 0 (job_runner.cpp):
-  // lower error per frame, but a mean biased upwards where the image is dark.
+  // The gradient-domain integrators' output clamped at 0 (add_direct_clamped
+  // in core/job/integrators): lower error per frame, but a mean biased
+  // upwards where the image is dark.
   bool clamp_negative = true;
 };
 
-// Emitters seen directly (core/render/direct_emission.h); -1 = the
+// Emitters seen directly (core/render/direct_emission.h); unset: the
 // integrator's default (4/16 for gpt and tgpt, 0/0 for pt).
 struct DirectLightSpec {
-  int strata = -1;
-  int edge_strata = -1;
+  std::optional<int> strata;
+  std::optional<int> edge_strata;
 };
 
 struct OutputSpec {
@@ -49,9 +56,9 @@ struct JobSpec {
   int spp = 0;                         // 0: the scene's sample_count
   double time_budget_s = 0;            // per frame; 0: use spp
   uint64_t seed = 0;
-  std::string integrator = "pt";       // pt | gpt | tgpt
-  std::string shift = "reconnect";     // replay | reconnect | hybrid
-  std::string temporal_shift = "replay";  // tgpt: replay | reconnect (path space)
+  Integrator integrator = kDefaultIntegrator;
+  ShiftMapping shift = kDefaultShiftMapping;                   // gpt and tgpt
+  TemporalShiftMapping temporal_shift = kDefaultTemporalShift;  // tgpt
   ReconstructionSpec reconstruction;
   DirectLightSpec direct_light;
   std::map<std::string, std::string> params;  // Mitsuba <default> overrides
@@ -65,7 +72,8 @@ struct JobSpec {
 // the offending token. Limit the count with `max_frames` (0: no limit).
 Expected<std::vector<int>> parse_frame_range(const std::string& text, size_t max_frames = 0);
 
-// JSON <-> JobSpec. `origin` names the source in error messages.
+// JSON <-> JobSpec. `origin` names the source in error messages. A parsed
+// job has passed validate() (core/job/job_validation.h).
 Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string& origin);
 std::string job_to_json(const JobSpec& job);
 

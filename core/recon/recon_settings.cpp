@@ -5,24 +5,6 @@
 
 namespace gdvr {
 
-const char* recon_method_name(ReconMethod m) {
-  switch (m) {
-    case ReconMethod::kNone: return "none";
-    case ReconMethod::kL2: return "l2";
-    case ReconMethod::kL1: return "l1";
-    case ReconMethod::kUniform: return "uniform";
-    case ReconMethod::kWeighted: return "weighted";
-  }
-  return "?";
-}
-
-Expected<ReconMethod> parse_recon_method(const std::string& name) {
-  for (ReconMethod m : {ReconMethod::kNone, ReconMethod::kL2, ReconMethod::kL1, ReconMethod::kUniform,
-                        ReconMethod::kWeighted})
-    if (name == recon_method_name(m)) return m;
-  return invalid_argument("recon method: unknown '" + name + "' (expected none, l2, l1, uniform or weighted)");
-}
-
 namespace {
 Status positive_finite(double v, const char* field) {
   if (!std::isfinite(v) || v <= 0)

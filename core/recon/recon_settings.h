@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/recon/term.h"
+#include "core/util/enum_names.h"
 #include "core/util/status.h"
 
 namespace gdvr {
@@ -18,13 +19,29 @@ enum class ReconMethod {
   kWeighted,  // image-space control variates, inverse-variance weights
 };
 
-const char* recon_method_name(ReconMethod m);
-Expected<ReconMethod> parse_recon_method(const std::string& name);
+// The spellings of job files and flags ("reconstruction.method", --recon).
+inline constexpr EnumNames<ReconMethod, 5> kReconMethodNames = {{{ReconMethod::kL1, "l1"},
+                                                                 {ReconMethod::kL2, "l2"},
+                                                                 {ReconMethod::kUniform, "uniform"},
+                                                                 {ReconMethod::kWeighted, "weighted"},
+                                                                 {ReconMethod::kNone, "none"}}};
+inline const char* recon_method_name(ReconMethod m) { return enum_name(kReconMethodNames, m); }
+inline Expected<ReconMethod> parse_recon_method(const std::string& name) {
+  return parse_enum_name(kReconMethodNames, name, "recon method");
+}
+
+// Primal weight α of ‖α(Ī − I_g)‖: 0.2 in the G-PT and T-GPT releases, and
+// the default of every job.
+inline constexpr double kDefaultReconAlpha = 0.2;
 
 struct ReconSettings {
+  // The library's default for a caller that builds ReconSettings itself (the
+  // benchmarks, the solver tests): L2, the screened Poisson solve the other
+  // methods are measured against. A job's default is L1 (kDefaultJobReconMethod
+  // in core/job/job_defaults.h, the public job format's default), and a job
+  // always sets `method`, so this value never reaches a job's image.
   ReconMethod method = ReconMethod::kL2;
-  // Primal weight α of ‖α(Ī − I_g)‖; 0.2 in the G-PT and T-GPT releases.
-  double alpha = 0.2;
+  double alpha = kDefaultReconAlpha;
   // Extra multiplier per term (primal, dx, dy, dt, dxdt, dydt); 0 drops a term.
   std::array<double, kTermCount> term_weights = {1, 1, 1, 1, 1, 1};
 

@@ -27,7 +27,9 @@ namespace {
 namespace fs = std::filesystem;
 
 struct MethodSpec {
-  std::string name, integrator, reconstruction;
+  std::string name;
+  Integrator integrator;
+  std::optional<ReconMethod> reconstruction;  // none for pt
   // PT with the stratified direct-light pass the gradient-domain methods use
   // (job.direct_light 4/16): the stronger baseline; plain `pt` is Mitsuba's estimator.
   bool direct_pass = false;
@@ -39,10 +41,15 @@ struct MethodSpec {
 
 const std::vector<MethodSpec>& all_methods() {
   static const std::vector<MethodSpec> kMethods = {
-      {"pt", "pt", ""},       {"pt-sd", "pt", "", true},           {"pt-oidn", "pt", "", false, true},
-      {"pt-sd-oidn", "pt", "", true, true},
-      {"gpt-l1", "gpt", "l1"}, {"gpt-l2", "gpt", "l2"}, {"gpt-weighted", "gpt", "weighted"},
-      {"tgpt-l1", "tgpt", "l1"}, {"tgpt-l2", "tgpt", "l2"},
+      {"pt", Integrator::kPt, std::nullopt},
+      {"pt-sd", Integrator::kPt, std::nullopt, true},
+      {"pt-oidn", Integrator::kPt, std::nullopt, false, true},
+      {"pt-sd-oidn", Integrator::kPt, std::nullopt, true, true},
+      {"gpt-l1", Integrator::kGpt, ReconMethod::kL1},
+      {"gpt-l2", Integrator::kGpt, ReconMethod::kL2},
+      {"gpt-weighted", Integrator::kGpt, ReconMethod::kWeighted},
+      {"tgpt-l1", Integrator::kTgpt, ReconMethod::kL1},
+      {"tgpt-l2", Integrator::kTgpt, ReconMethod::kL2},
   };
   return kMethods;
 }
@@ -177,7 +184,7 @@ Status build_reference(const ErrorTimeReportOptions& o, const std::vector<int>& 
                        ReportMeta* meta, const std::function<void(const std::string&)>& log,
                        const std::atomic<bool>* cancel) {
   JobSpec rj = o.job;
-  rj.integrator = "pt";
+  rj.integrator = Integrator::kPt;
   rj.spp = o.reference_spp;
   rj.time_budget_s = 0;
   rj.seed = o.job.seed ^ 0x9e3779b97f4a7c15ULL;  // independent of the PT runs' streams
@@ -286,7 +293,7 @@ Expected<DenoisedFrame> denoise_frame(const LayeredImage& frame, const Image& co
 Expected<DenoiseOverhead> measure_denoise_overhead(const ErrorTimeReportOptions& o, int frame, OidnDenoiser* denoiser,
                                                    const std::atomic<bool>* cancel) {
   JobSpec job = o.job;
-  job.integrator = "pt";
+  job.integrator = Integrator::kPt;
   job.frames = std::to_string(frame);
   job.spp = 1;
   job.time_budget_s = 0;
@@ -334,7 +341,7 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
                   RunImages* images, const std::function<void(double)>& progress, const std::atomic<bool>* cancel) {
   JobSpec job = o.job;
   job.integrator = m.integrator;
-  if (!m.reconstruction.empty()) job.reconstruction.method = m.reconstruction;
+  if (m.reconstruction) job.reconstruction.method = *m.reconstruction;
   if (m.direct_pass) job.direct_light = {4, 16};
   // Equal time: a denoised method's sampling gets what its features and the
   // denoiser leave of the budget (at least one pass: a budget > 0 renders one).
@@ -343,8 +350,8 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
   job.reference.clear();
 
   row->method = m.name;
-  row->integrator = m.integrator;
-  row->reconstruction = m.reconstruction;
+  row->integrator = integrator_name(m.integrator);
+  row->reconstruction = m.reconstruction ? recon_method_name(*m.reconstruction) : "";
   row->budget_s = budget;
   RelMseSums total, primal_total;
   bool have_primal = false;
@@ -393,7 +400,7 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
     // Unreconstructed estimate of the same samples: primal + direct.
     const ImageLayer* primal = out.image.find("primal");
     const ImageLayer* direct = out.image.find("direct");
-    if (m.integrator != "pt" && primal && direct && primal->image.data().size() == direct->image.data().size()) {
+    if (is_gradient_domain(m.integrator) && primal && direct && primal->image.data().size() == direct->image.data().size()) {
       Image raw = primal->image;
       for (size_t k = 0; k < raw.data().size(); ++k) raw.data()[k] += direct->image.data()[k];
       auto ps = rel_mse_sums(raw, it->second);
@@ -408,7 +415,7 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
     if (const ImageLayer* l = out.image.find("temporal_failure_rate"); l && has_next)
       temporal_fail += mean_finite(l->image), ++temporal_n;
     for (Term t : kAllTerms) {
-      if (is_temporal(t) && (m.integrator != "tgpt" || !has_next)) continue;
+      if (is_temporal(t) && (m.integrator != Integrator::kTgpt || !has_next)) continue;
       const ImageLayer* l = out.image.find(std::string(term_name(t)) + "_var");
       if (!l) continue;
       for (float v : l->image.data())
@@ -451,14 +458,14 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
     if (fl.ok()) row->flicker = fl.value();
   }
   if (have_primal && total.global() > 0) row->achieved_improvement = primal_total.global() / total.global();
-  if (m.integrator != "pt") {
+  if (is_gradient_domain(m.integrator)) {
     NoiseLevels levels;
     for (Term t : kAllTerms)
       levels[t] = noise.count[term_index(t)] > 0 ? noise.sum[term_index(t)] / noise.count[term_index(t)] : 0.0;
     ReconSettings s;
     s.method = ReconMethod::kL2;
     s.alpha = job.reconstruction.alpha;
-    auto pred = predicted_improvement(levels, s, /* temporal = */ m.integrator == "tgpt");
+    auto pred = predicted_improvement(levels, s, /* temporal = */ m.integrator == Integrator::kTgpt);
     if (pred.ok()) row->predicted_improvement = pred.value();
   }
   return Status::Ok();
@@ -653,7 +660,7 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
   meta.load = load_average();
 
   JobSpec pt_job = o.job;
-  pt_job.integrator = "pt";
+  pt_job.integrator = Integrator::kPt;
   GDVR_RETURN_IF_ERROR(validate_job(pt_job, o.run));
   auto frames_or = parse_frame_range(o.job.frames);
   if (!frames_or.ok()) return frames_or.status().with_context("job.frames: ");
@@ -687,14 +694,14 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
         continue;
       }
     }
-    if (m.integrator == "tgpt") {
+    if (m.integrator == Integrator::kTgpt) {
       if (!animated) {
         if (!o.methods.empty()) meta.notes.push_back(m.name + ": skipped, a still (T-GPT needs 2+ frames)");
         continue;
       }
       JobSpec t = o.job;
-      t.integrator = "tgpt";
-      t.reconstruction.method = m.reconstruction;
+      t.integrator = Integrator::kTgpt;
+      t.reconstruction.method = *m.reconstruction;
       Status st = validate_job(t, o.run);
       if (!st.ok()) {
         meta.notes.push_back(m.name + ": not available (" + st.message() + ")");

@@ -29,7 +29,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kMaxResolution = 16384;
 constexpr int kDiskSegments = 256;
 
 bool one_of(const std::string& s, std::initializer_list<const char*> list) {
@@ -710,9 +709,9 @@ class SceneBuilder {
     GDVR_RETURN_IF_ERROR(props.get_string("file_format", &file_format));
     GDVR_RETURN_IF_ERROR(props.get_string("component_format", &component_format));
     GDVR_RETURN_IF_ERROR(props.get_bool("sample_border", &sample_border));
-    if (scene_.defaults.width <= 0 || scene_.defaults.width > kMaxResolution || scene_.defaults.height <= 0 ||
-        scene_.defaults.height > kMaxResolution)
-      return props.error(e, "width and height must be in [1, 16384]");
+    if (scene_.defaults.width <= 0 || scene_.defaults.width > kMaxFilmResolution || scene_.defaults.height <= 0 ||
+        scene_.defaults.height > kMaxFilmResolution)
+      return props.error(e, "width and height must be in [1, " + std::to_string(kMaxFilmResolution) + "]");
     for (const XmlElement* c : props.take_unnamed()) {
       Expected<const XmlElement*> t = deref(*c);
       if (!t.ok()) return t.status();
@@ -780,7 +779,7 @@ class SceneBuilder {
 
   Status check_defaults() const {
     const RenderDefaults& d = scene_.defaults;
-    if (d.width <= 0 || d.width > kMaxResolution || d.height <= 0 || d.height > kMaxResolution)
+    if (d.width <= 0 || d.width > kMaxFilmResolution || d.height <= 0 || d.height > kMaxFilmResolution)
       return invalid_argument(scene_.source + ": film size out of range");
     if (d.spp <= 0) return invalid_argument(scene_.source + ": sample_count must be positive");
     return Status::Ok();

@@ -54,6 +54,11 @@ struct SettingOrigin {
   std::vector<std::string> params;  // <default> parameters substituted into it ("res")
 };
 
+// The largest film side a scene file or a job may ask for. It bounds what one
+// request can make a render node allocate: a 16384² RGB float layer is 3 GiB,
+// and a gradient-domain frame holds a dozen layers.
+inline constexpr int kMaxFilmResolution = 16384;
+
 struct RenderDefaults {
   int width = 768, height = 576;  // hdrfilm
   int spp = 4;                    // sampler sample_count

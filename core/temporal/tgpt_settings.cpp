@@ -4,16 +4,6 @@
 
 namespace gdvr {
 
-const char* temporal_shift_name(TemporalShiftMapping m) {
-  return m == TemporalShiftMapping::kReconnect ? "reconnect" : "replay";
-}
-
-Expected<TemporalShiftMapping> parse_temporal_shift(const std::string& name) {
-  for (TemporalShiftMapping m : {TemporalShiftMapping::kReplay, TemporalShiftMapping::kReconnect})
-    if (name == temporal_shift_name(m)) return m;
-  return invalid_argument("temporal_shift: unknown '" + name + "' (expected replay or reconnect)");
-}
-
 Status TgptSettings::validate() const {
   GDVR_RETURN_IF_ERROR(gpt.validate().with_context("tgpt.gpt: "));
   GDVR_RETURN_IF_ERROR(recon.validate().with_context("tgpt.recon: "));

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "core/recon/reconstruct.h"
-#include "core/recon/sliding_window.h"
+#include "core/temporal/tgpt_settings.h"
 #include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
 
@@ -112,6 +112,13 @@ void bench(const char* label, const GradientWindow& w, ReconSettings s, ReconMet
   std::fflush(stdout);
 }
 
+// The hop of T-GPT's sliding window of `frames` frames (core/temporal/temporal_window.h).
+int window_hop(int frames) {
+  TgptSettings s;
+  s.window = frames;
+  return s.effective_hop();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -161,7 +168,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::printf("gdvr-bench-recon: %dx%d, threads %d, runs %d, window %d frames (hop %d)\n", a.width, a.height, threads,
-              a.runs, a.frames, SlidingWindowOptions{a.frames, 0}.effective_hop());
+              a.runs, a.frames, window_hop(a.frames));
 
   if (a.single) {
     GradientWindow w;
@@ -172,7 +179,7 @@ int main(int argc, char** argv) {
     GradientWindow w;
     for (int t = 0; t < a.frames; ++t) w.frames.push_back(make_frame(a.width, a.height, t, true));
     // The sliding window advances by its hop: each solve pays for hop frames.
-    const int hop = SlidingWindowOptions{a.frames, 0}.effective_hop();
+    const int hop = window_hop(a.frames);
     char label[64];
     std::snprintf(label, sizeof label, "window %d (hop %d)", a.frames, hop);
     for (ReconMethod m : a.methods) bench(label, w, a.settings, m, a.runs, hop);

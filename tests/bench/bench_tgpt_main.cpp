@@ -160,13 +160,13 @@ int quality(const Args& a) {
   JobSpec base = parsed.value();
   base.width = base.height = a.res;
   base.frames = "0-" + std::to_string(a.frames - 1);
-  base.reconstruction.method = "l2";
+  base.reconstruction.method = ReconMethod::kL2;
   base.reconstruction.window = a.window;
 
   std::printf("demo animation at %dx%d, %d frames, window %d, %d threads\n", a.res, a.res, a.frames, a.window,
               a.threads);
   JobSpec ref_job = base;
-  ref_job.integrator = "pt";
+  ref_job.integrator = Integrator::kPt;
   ref_job.spp = a.ref_spp;
   ref_job.seed = 987654321;
   SequenceRun reference;
@@ -206,9 +206,9 @@ int quality(const Args& a) {
   const std::vector<std::string> methods = {"tgpt", "tgpt-rc", "tgpt-w1", "gpt", "pt", "pt-sd"};
   auto configure = [&](JobSpec* job, const std::string& m) {
     const bool tgpt = m.rfind("tgpt", 0) == 0;
-    job->integrator = tgpt ? "tgpt" : m == "pt-sd" ? "pt" : m;
+    job->integrator = tgpt ? Integrator::kTgpt : m == "gpt" ? Integrator::kGpt : Integrator::kPt;
     job->reconstruction.window = m == "tgpt-w1" ? 1 : a.window;
-    job->temporal_shift = m == "tgpt-rc" ? "reconnect" : "replay";
+    job->temporal_shift = m == "tgpt-rc" ? TemporalShiftMapping::kReconnect : TemporalShiftMapping::kReplay;
     if (m == "pt-sd") job->direct_light = {4, 16};
   };
   std::map<std::string, double> per_spp, fixed;
@@ -331,13 +331,11 @@ int recon(const Args& a) {
   s.max_same_pixel_motion_px = -1;
   const int n = a.shot;
   std::vector<int> todo;
+  for (int f = 0; f < n; ++f) todo.push_back(f);
+  TemporalWindowCache cache(s, todo);
   std::vector<std::vector<int>> needs;
-  for (int f = 0; f < n; ++f) {
-    todo.push_back(f);
-    needs.push_back(positions_needed(n, s.window, 0, f));
-  }
+  for (int f : todo) needs.push_back(cache.frames_needed(f));
   StreamSchedule schedule(todo, needs);
-  TemporalWindowCache cache(s, n);
   std::map<int, LayeredImage> buffers;
   std::mt19937 rng(1234);
   double solve_seconds = 0, gen_seconds = 0;
@@ -363,12 +361,12 @@ int recon(const Args& a) {
         if (!tg.ok()) return 1;
       }
       solve_seconds += seconds_since(s0);
-      cache.release_before(r + 1);
+      cache.release_through(r);
       schedule.finalized();
       ++emitted;
     }
-    const int first = schedule.done() ? n : schedule.next_index();
-    for (int d : schedule.releasable([&](int p) { return cache.buffers_needed(p, first); })) buffers.erase(d);
+    const int next_out = schedule.done() ? n : todo[size_t(schedule.next_index())];
+    for (int d : schedule.releasable([&](int f) { return cache.buffers_needed(f, next_out); })) buffers.erase(d);
   }
   const double total = seconds_since(t0);
   std::printf("stage 2 %s, %dx%d, shot %d frames, window %d (hop %d): %d windows, %.2f s per output frame "

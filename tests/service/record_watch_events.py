@@ -4,7 +4,7 @@ ProgressViewTest (tests/service/progress_view_test.cpp): each event with
 its arrival time, EXR bytes left out. Run by hand against a fresh server; the
 output is committed (tests/service/data/tgpt_watch_events.tsv).
 
-  PYTHONPATH=client/python /usr/bin/python3 tests/service/record_watch_events.py \
+  PYTHONPATH=build/python /usr/bin/python3 tests/service/record_watch_events.py \
       --server-bin build/bin/gdvr-server --source-dir . --out tests/service/data/tgpt_watch_events.tsv
 
 The job is the demo's animation (scenes/demo), small: 24 frames, a window of 8,

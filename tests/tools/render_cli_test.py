@@ -2,8 +2,10 @@
 """gdvr-render's command line (ctest render_cli): the integrator, shift and
 reconstruction flags reach the job (stats.json says what ran), bad values are
 rejected with exit 2 and a message naming the flag, and a T-GPT job with the
-path-space temporal shift counts its temporal rays. The benchmark tools
-(--bench TOOL, repeatable) reject malformed numbers the same way."""
+path-space temporal shift counts its temporal rays. gdvr-report (--report)
+takes the flags it shares with gdvr-render (core/job/job_flags.h) alike. The
+benchmark tools (--bench TOOL, repeatable) reject malformed numbers the same
+way."""
 import argparse, json, os, subprocess, sys, tempfile
 
 
@@ -18,6 +20,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--render", required=True)
     ap.add_argument("--source", required=True)
+    ap.add_argument("--report", help="gdvr-report")
     ap.add_argument("--bench", action="append", default=[], help="a gdvr-bench* executable")
     a = ap.parse_args()
     demo = os.path.join(a.source, "scenes", "demo", "demo_job.json")
@@ -55,7 +58,22 @@ def main():
                 sys.exit(f"FAIL: {args}: message does not name '{needle}':\n{p.stderr}")
         # An unknown integrator is the job's error (exit 1), naming the field.
         p = run(a.render, [cbox, "--out", os.path.join(tmp, "bad"), "--integrator", "bdpt"], 1)
-        assert "bdpt" in p.stderr, p.stderr
+        assert "bdpt" in p.stderr and "job.integrator" in p.stderr, p.stderr
+        # So is a value the job refuses, whether from a flag or the file.
+        p = run(a.render, [cbox, "--out", os.path.join(tmp, "bad"), "--frames", "5-1"], 1)
+        assert "job.frames" in p.stderr, p.stderr
+
+        # ---- gdvr-report: the shared flags, parsed alike; its own too ----
+        if a.report:
+            for args, needle in [(["--width", "0"], "--width"), (["--seed", "x"], "--seed"),
+                                 (["--param", "res"], "--param"), (["--frames"], "--frames needs a value"),
+                                 (["--threads", "0"], "--threads"), (["--budgets", "x"], "--budgets"),
+                                 (["--spp", "4"], "unknown option --spp"), (["--bogus"], "unknown option --bogus")]:
+                p = run(a.report, [cbox, "--out", os.path.join(tmp, "report")] + args, 2)
+                if needle not in p.stderr:
+                    sys.exit(f"FAIL: gdvr-report {args}: message does not name '{needle}':\n{p.stderr}")
+            p = run(a.report, [cbox, "--out", os.path.join(tmp, "report"), "--frames", "5-1"], 1)
+            assert "job.frames" in p.stderr, p.stderr
 
     # ---- Benchmark tools: a malformed number is exit 2 naming the option ----
     # (std::stoi threw and std::atoi read 0 before cli_args.h's int_option.)

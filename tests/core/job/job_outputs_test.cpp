@@ -27,7 +27,7 @@ JobSpec tiny_demo_job(const std::string& integrator) {
   job.width = job.height = 12;
   job.spp = 1;
   job.seed = 5;
-  job.integrator = integrator;
+  job.integrator = parse_integrator(integrator).value();
   job.reconstruction.window = 3;
   job.outputs.previews = false;
   job.outputs.video_codec = "none";

@@ -2,9 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
+#include "core/job/job_validation.h"
 #include "core/scene/mitsuba_loader.h"
 
 namespace gdvr {
@@ -88,7 +90,9 @@ TEST(JobSpecTest, ParsesEveryField) {
   ASSERT_TRUE(job.ok()) << job.status().to_string();
   EXPECT_EQ(job->scene, "cbox/cbox-rgb.xml");
   EXPECT_EQ(job->seed, 18446744073709551615ull);
-  EXPECT_EQ(job->integrator, "gpt");
+  EXPECT_EQ(job->integrator, Integrator::kGpt);
+  EXPECT_EQ(job->shift, ShiftMapping::kHybrid);
+  EXPECT_EQ(job->reconstruction.method, ReconMethod::kL2);
   EXPECT_EQ(job->reconstruction.window, 5);
   EXPECT_EQ(job->reconstruction.term_weights, (std::vector<double>{1, 1, 1, 2, 0.5, 0.5}));
   EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->reconstruction.term_weights, job->reconstruction.term_weights);
@@ -111,11 +115,117 @@ TEST(JobSpecTest, ParsesEveryField) {
   // Unset means the integrator's default, and survives a round trip as unset.
   auto plain = parse_job_json(R"({"scene": "a.xml"})", "j");
   ASSERT_TRUE(plain.ok());
-  EXPECT_EQ(plain->direct_light.strata, -1);
+  EXPECT_FALSE(plain->direct_light.strata.has_value());
   auto again = parse_job_json(job_to_json(*plain), "again");
   ASSERT_TRUE(again.ok());
-  EXPECT_EQ(again->direct_light.strata, -1);
+  EXPECT_FALSE(again->direct_light.strata.has_value());
   EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->direct_light.edge_strata, 8);
+}
+
+// The defaults the public job format documents, taken from the settings that
+// own them, and printed back under the same names.
+TEST(JobSpecTest, DefaultsAreTheDocumentedOnes) {
+  auto job = parse_job_json(R"({"scene": "a.xml"})", "j");
+  ASSERT_TRUE(job.ok()) << job.status().to_string();
+  EXPECT_EQ(job->integrator, Integrator::kPt);
+  EXPECT_EQ(job->shift, ShiftMapping::kReconnect);
+  EXPECT_EQ(job->temporal_shift, TemporalShiftMapping::kReplay);
+  EXPECT_EQ(job->reconstruction.method, ReconMethod::kL1);
+  EXPECT_EQ(job->reconstruction.alpha, 0.2);
+  EXPECT_EQ(job->reconstruction.window, 20);
+  EXPECT_EQ(job->reconstruction.alpha, ReconSettings().alpha);
+  EXPECT_EQ(job->reconstruction.window, TgptSettings().window);
+  const std::string text = job_to_json(*job);
+  for (const char* field : {R"("integrator": "pt")", R"("shift": "reconnect")", R"("temporal_shift": "replay")",
+                            R"("method": "l1")"})
+    EXPECT_NE(text.find(field), std::string::npos) << field << " in\n" << text;
+}
+
+// Every accepted spelling parses to its value and prints back unchanged.
+TEST(JobSpecTest, NamesRoundTrip) {
+  for (const auto& n : kIntegratorNames) {
+    auto job = parse_job_json(std::string(R"({"scene": "a.xml", "integrator": ")") + n.name + "\"}", "j");
+    ASSERT_TRUE(job.ok()) << n.name;
+    EXPECT_EQ(job->integrator, n.value);
+    EXPECT_NE(job_to_json(*job).find(std::string("\"") + n.name + "\""), std::string::npos);
+  }
+  for (const auto& n : kShiftMappingNames)
+    EXPECT_EQ(parse_job_json(std::string(R"({"scene": "a.xml", "shift": ")") + n.name + "\"}", "j")->shift, n.value);
+  for (const auto& n : kTemporalShiftNames)
+    EXPECT_EQ(parse_job_json(std::string(R"({"scene": "a.xml", "temporal_shift": ")") + n.name + "\"}", "j")
+                  ->temporal_shift,
+              n.value);
+  for (const auto& n : kReconMethodNames)
+    EXPECT_EQ(parse_job_json(std::string(R"({"scene": "a.xml", "reconstruction": {"method": ")") + n.name + "\"}}",
+                             "j")
+                  ->reconstruction.method,
+              n.value);
+}
+
+// An unknown name is refused with the field and the names it accepts.
+TEST(JobSpecTest, UnknownNamesListTheAllowedOnes) {
+  struct Case {
+    const char* json;
+    const char* field;
+    const char* allowed;
+  } cases[] = {
+      {R"({"scene": "a.xml", "integrator": "bdpt"})", "job.integrator", "pt, gpt or tgpt, not 'bdpt'"},
+      {R"({"scene": "a.xml", "shift": "sideways"})", "job.shift", "replay, reconnect or hybrid, not 'sideways'"},
+      {R"({"scene": "a.xml", "temporal_shift": "warp"})", "job.temporal_shift", "replay or reconnect, not 'warp'"},
+      {R"({"scene": "a.xml", "reconstruction": {"method": "l3"}})", "job.reconstruction.method",
+       "l1, l2, uniform, weighted or none, not 'l3'"},
+      {R"({"scene": "a.xml", "integrator": 3})", "job.integrator", "must be a string"},
+  };
+  for (const Case& c : cases) {
+    auto job = parse_job_json(c.json, "j.json");
+    ASSERT_FALSE(job.ok()) << c.json;
+    EXPECT_EQ(job.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(job.status().message().find(c.field), std::string::npos) << job.status().message();
+    EXPECT_NE(job.status().message().find(c.allowed), std::string::npos) << job.status().message();
+  }
+}
+
+// validate() checks a JobSpec however it was built (flags, code), with the
+// messages the job file gets.
+TEST(JobSpecTest, ValidateNamesTheField) {
+  JobSpec job;
+  job.scene = "a.xml";
+  EXPECT_TRUE(validate(job).ok());
+  auto expect_field = [](const JobSpec& j, const char* field) {
+    Status st = validate(j);
+    EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_EQ(st.message().rfind(field, 0), 0u) << st.message();
+  };
+  JobSpec bad = job;
+  bad.scene.clear();
+  expect_field(bad, "job.scene");
+  bad = job;
+  bad.width = kMaxJobResolution + 1;
+  expect_field(bad, "job.width");
+  bad = job;
+  bad.spp = -1;
+  expect_field(bad, "job.spp");
+  bad = job;
+  bad.time_budget_s = std::nan("");
+  expect_field(bad, "job.time_budget_s");
+  bad = job;
+  bad.reconstruction.window = 0;
+  expect_field(bad, "job.reconstruction.window");
+  bad = job;
+  bad.reconstruction.alpha = -1;
+  expect_field(bad, "job.reconstruction.alpha");
+  bad = job;
+  bad.reconstruction.term_weights = {1, 1};
+  expect_field(bad, "job.reconstruction.term_weights");
+  bad = job;
+  bad.direct_light.edge_strata = kMaxDirectStrata + 1;
+  expect_field(bad, "job.direct_light.edge_strata");
+  bad = job;
+  bad.outputs.video_codec = "gif";
+  expect_field(bad, "job.outputs.video_codec");
+  bad = job;
+  bad.frames = "0-99999999";
+  EXPECT_EQ(validate(bad).code(), StatusCode::kResourceExhausted);
 }
 
 TEST(JobSpecTest, RoundTrip) {

@@ -75,13 +75,13 @@ class HiddenEmittersTest : public ::testing::Test {
   void write(const std::string& name, const std::string& xml) { std::ofstream(dir_ + "/" + name) << xml; }
 
   // The mean of the final images of frames 0-1.
-  double render_mean(const std::string& scene, const std::string& integrator) {
+  double render_mean(const std::string& scene, Integrator integrator) {
     JobSpec job;
     job.scene = scene;
     job.frames = "0-1";
     job.spp = 16;
     job.integrator = integrator;
-    job.reconstruction.method = "l2";
+    job.reconstruction.method = ReconMethod::kL2;
     JobRunOptions options;
     options.base_dir = dir_;
     double sum = 0;
@@ -105,8 +105,8 @@ class HiddenEmittersTest : public ::testing::Test {
 };
 
 TEST_F(HiddenEmittersTest, CameraRaysSeeTheWallBehindAHiddenLight) {
-  for (const char* integrator : {"pt", "gpt", "tgpt"}) {
-    SCOPED_TRACE(integrator);
+  for (Integrator integrator : {Integrator::kPt, Integrator::kGpt, Integrator::kTgpt}) {
+    SCOPED_TRACE(integrator_name(integrator));
     // Shown, the light turns its black back to the camera.
     EXPECT_LT(render_mean("shown.xml", integrator), 1e-6);
     // Hidden, the wall behind it shows, lit by it (all but ~1e-4 of the hemisphere).
@@ -131,12 +131,12 @@ TEST_F(HiddenEmittersTest, WhatIsSeenThroughAWindowPaneStaysHidden) {
   write("sky_hidden.xml", window_pane_xml(true, 8, false));
   write("light_hidden_2.xml", window_pane_xml(true, 2, true));
   write("light_hidden_8.xml", window_pane_xml(true, 8, true));
-  EXPECT_NEAR(render_mean("sky_shown.xml", "pt"), 1.0, 0.01);
+  EXPECT_NEAR(render_mean("sky_shown.xml", Integrator::kPt), 1.0, 0.01);
   // Only the reflection: 2R / (1 + R) with R = 0.04 at normal incidence (Mitsuba: 0.0779).
-  EXPECT_NEAR(render_mean("sky_hidden.xml", "pt"), 0.0779, 0.004);
-  EXPECT_LT(render_mean("light_hidden_2.xml", "pt"), 1e-6);
+  EXPECT_NEAR(render_mean("sky_hidden.xml", Integrator::kPt), 0.0779, 0.004);
+  EXPECT_LT(render_mean("light_hidden_2.xml", Integrator::kPt), 1e-6);
   // Transmitted: 2 (1 - R) / (1 + R) (Mitsuba: 1.8486).
-  EXPECT_NEAR(render_mean("light_hidden_8.xml", "pt"), 1.8486, 0.02);
+  EXPECT_NEAR(render_mean("light_hidden_8.xml", Integrator::kPt), 1.8486, 0.02);
 }
 
 }  // namespace

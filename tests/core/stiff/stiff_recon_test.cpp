@@ -36,7 +36,7 @@ class StiffAlphaTest : public ::testing::TestWithParam<AlphaParam> {};
 TEST_P(StiffAlphaTest, FiniteAndPinnedToPrimalOrMean) {
   const StiffCase& c = glass_case();
   JobSpec job = make_job(c, Integ::kGptReconnect, 16, 4);
-  job.reconstruction.method = GetParam().method;
+  job.reconstruction.method = parse_recon_method(GetParam().method).value();
   job.reconstruction.alpha = GetParam().alpha;
   auto out = run(job);
   ASSERT_EQ(out.size(), 1u);
@@ -90,7 +90,7 @@ TEST_P(StiffWindowTest, FiniteAndConverging) {
     return job;
   };
   JobSpec ref_job = job_for(512, 99);
-  ref_job.integrator = "pt";
+  ref_job.integrator = Integrator::kPt;
   auto ref = run(ref_job);
   auto lo = run(job_for(8, 1)), hi = run(job_for(32, 2));
   for (FrameOutput& f : run(job_for(8, 3))) lo.push_back(std::move(f));

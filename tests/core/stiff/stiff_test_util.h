@@ -189,19 +189,20 @@ inline JobSpec make_job(const StiffCase& c, Integ integ, int spp, uint64_t seed)
   job.width = job.height = c.res;
   job.spp = spp;
   job.seed = seed;
-  job.reconstruction.method = "l2";
+  job.reconstruction.method = ReconMethod::kL2;
   job.outputs.previews = false;
   job.outputs.video_codec = "none";
   switch (integ) {
-    case Integ::kPt: job.integrator = "pt"; break;
-    case Integ::kGptReplay: job.integrator = "gpt", job.shift = "replay"; break;
-    case Integ::kGptReconnect: job.integrator = "gpt", job.shift = "reconnect"; break;
-    case Integ::kGptHybrid: job.integrator = "gpt", job.shift = "hybrid"; break;
+    case Integ::kPt: job.integrator = Integrator::kPt; break;
+    case Integ::kGptReplay: job.integrator = Integrator::kGpt, job.shift = ShiftMapping::kReplay; break;
+    case Integ::kGptReconnect: job.integrator = Integrator::kGpt, job.shift = ShiftMapping::kReconnect; break;
+    case Integ::kGptHybrid: job.integrator = Integrator::kGpt, job.shift = ShiftMapping::kHybrid; break;
     case Integ::kTgpt:
     case Integ::kTgptPathSpace:
-      job.integrator = "tgpt";
-      job.shift = "reconnect";
-      job.temporal_shift = integ == Integ::kTgptPathSpace ? "reconnect" : "replay";
+      job.integrator = Integrator::kTgpt;
+      job.shift = ShiftMapping::kReconnect;
+      job.temporal_shift =
+          integ == Integ::kTgptPathSpace ? TemporalShiftMapping::kReconnect : TemporalShiftMapping::kReplay;
       job.frames = "0-1";
       job.reconstruction.window = 2;
       job.animation = camera_slide(c);
@@ -238,7 +239,7 @@ inline const std::vector<Image>& pt_reference(const StiffCase& c, bool animated)
     return cache[key] = std::vector<Image>(animated ? 2 : 1, img);
   }
   JobSpec job = make_job(c, animated ? Integ::kTgpt : Integ::kPt, c.spp_ref, 987654321);
-  job.integrator = "pt";
+  job.integrator = Integrator::kPt;
   std::vector<Image> ref;
   for (const FrameOutput& f : run(job)) ref.push_back(f.image.find("")->image);
   return cache[key] = ref;

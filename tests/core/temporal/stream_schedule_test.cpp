@@ -1,42 +1,41 @@
-// The sliding-window schedule of stage 2: the same windows as core/recon's
-// streaming driver, frames in order with bounded latency, and buffers bounded
-// by the window whatever the shot length.
+// The sliding-window schedule of stage 2: windows as frames stream in, frames
+// in order with bounded latency, and buffers bounded by the window whatever
+// the shot length.
 #include "core/temporal/stream_schedule.h"
 
 #include <gtest/gtest.h>
 
 #include <map>
 
-#include "core/recon/sliding_window.h"
 #include "core/temporal/temporal_window.h"
 
 namespace gdvr {
 namespace {
 
-TEST(TemporalWindowTest, SameWindowsAsTheReconDriver) {
+// The windows a streaming solver forms: the first W frames, then every H
+// frames the W frames from there while a whole window fits, then what is
+// left after the last whole window as one clamped window.
+TEST(TemporalWindowTest, WindowsAreThoseOfAStreamingSolver) {
   for (int n : {1, 2, 5, 19, 20, 21, 30, 45, 64})
     for (int w : {1, 2, 3, 4, 20}) {
-      std::vector<std::pair<int, int>> driver;
-      SlidingWindowOptions opt;
-      opt.window = w;
-      // Record window ranges through the solver: the driver passes frames in order,
-      // so a window's first frame is identified by a per-frame tag in its primal.
-      SlidingWindowReconstructor r(opt, [&](const GradientWindow& win) -> Expected<std::vector<Image>> {
-        const int first = int(win.frames.front()->buffer(Term::kPrimal).data()[0]);
-        driver.push_back({first, first + win.size()});
-        return std::vector<Image>(size_t(win.size()), Image(1, 1, 3));
-      });
-      std::vector<ReconFrame> out;
-      for (int f = 0; f < n; ++f) {
-        GradientFrame gf;
-        gf.buffer(Term::kPrimal) = Image(1, 1, 3);
-        gf.buffer(Term::kPrimal).data()[0] = float(f);
-        ASSERT_TRUE(r.push(std::make_shared<const GradientFrame>(std::move(gf)), &out).ok());
-      }
-      ASSERT_TRUE(r.end_shot(&out).ok());
+      const int hop = std::max(1, w / 2);
+      std::vector<std::pair<int, int>> expected;
+      int start = 0, end = 0;
+      for (; start + w <= n; start += hop) expected.push_back({start, end = start + w});
+      if (end < n) expected.push_back({start, n});
       std::vector<std::pair<int, int>> ours;
       for (const WindowRange& wr : shot_windows(n, w, 0)) ours.push_back({wr.start, wr.end});
-      EXPECT_EQ(ours, driver) << "n=" << n << " W=" << w;
+      EXPECT_EQ(ours, expected) << "n=" << n << " W=" << w;
+      // They cover the shot, start in order, and hold at most W frames.
+      EXPECT_EQ(ours.front().first, 0);
+      EXPECT_EQ(ours.back().second, n);
+      for (size_t k = 0; k < ours.size(); ++k) {
+        EXPECT_LE(ours[k].second - ours[k].first, w);
+        if (k > 0) {
+          EXPECT_GT(ours[k].first, ours[k - 1].first);
+          EXPECT_LE(ours[k].first, ours[k - 1].second);
+        }
+      }
     }
 }
 
@@ -49,11 +48,12 @@ struct StreamRun {
 
 StreamRun stream(int n, int w) {
   std::vector<int> todo;
+  for (int f = 0; f < n; ++f) todo.push_back(f);
+  TgptSettings settings;
+  settings.window = w;
+  const TemporalWindowCache windows(settings, todo);
   std::vector<std::vector<int>> needs;
-  for (int f = 0; f < n; ++f) {
-    todo.push_back(f);
-    needs.push_back(positions_needed(n, w, 0, f));
-  }
+  for (int f : todo) needs.push_back(windows.frames_needed(f));
   StreamSchedule s(todo, needs);
   StreamRun run;
   int rendered = 0;
@@ -113,15 +113,13 @@ LayeredImage tiny_frame(int t, int n) {
 // rule about W frames of buffers are held, the same for a 2x longer shot.
 int stream_with_cache(int n, int w, std::vector<int>* order) {
   std::vector<int> todo;
-  std::vector<std::vector<int>> needs;
-  for (int f = 0; f < n; ++f) {
-    todo.push_back(f);
-    needs.push_back(positions_needed(n, w, 0, f));
-  }
-  StreamSchedule s(todo, needs);
+  for (int f = 0; f < n; ++f) todo.push_back(f);
   TgptSettings settings;
   settings.window = w;
-  TemporalWindowCache cache(settings, n);
+  TemporalWindowCache cache(settings, todo);
+  std::vector<std::vector<int>> needs;
+  for (int f : todo) needs.push_back(cache.frames_needed(f));
+  StreamSchedule s(todo, needs);
   std::map<int, LayeredImage> held;
   for (int f : s.render_order()) {
     held[f] = tiny_frame(f, n);
@@ -135,10 +133,10 @@ int stream_with_cache(int n, int w, std::vector<int>* order) {
       if (!img.ok()) return -1;
       order->push_back(r);
       s.finalized();
-      cache.release_before(r + 1);
+      cache.release_through(r);
     }
-    const int first = s.done() ? n : s.next_index();
-    for (int d : s.releasable([&](int p) { return cache.buffers_needed(p, first); })) held.erase(d);
+    const int next_out = s.done() ? n : todo[size_t(s.next_index())];
+    for (int d : s.releasable([&](int f) { return cache.buffers_needed(f, next_out); })) held.erase(d);
     EXPECT_LE(cache.cached_windows(), 3);
   }
   return s.max_buffered();

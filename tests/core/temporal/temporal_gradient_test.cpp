@@ -27,15 +27,15 @@ constexpr int kRes = 16;
 JobSpec moving_job(const std::string& integrator, int spp, uint64_t seed, bool camera_moves = false,
                    const std::string& temporal_shift = "replay", bool matpreview = false) {
   JobSpec job;
-  job.temporal_shift = temporal_shift;
+  job.temporal_shift = parse_temporal_shift(temporal_shift).value();
   job.scene = matpreview ? "matpreview.xml" : "cbox_demo.xml";
   job.frames = "0,6";  // consecutive frames of the job, a quarter second apart: a clear change
   job.fps = 24;
   job.width = job.height = kRes;
   job.spp = spp;
   job.seed = seed;
-  job.integrator = integrator;
-  job.reconstruction.method = "l2";
+  job.integrator = parse_integrator(integrator).value();
+  job.reconstruction.method = ReconMethod::kL2;
   if (matpreview) {
     job.params["max_depth"] = "6";  // the scene's -1 (unbounded) only adds deep, dim paths
     Track cam;

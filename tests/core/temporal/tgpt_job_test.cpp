@@ -18,15 +18,15 @@ std::string demo_dir() { return std::string(GDVR_SOURCE_DIR) + "/scenes/demo"; }
 
 JobSpec tgpt_job(const std::string& temporal_shift, const std::string& frames, bool animated, int window) {
   JobSpec job;
-  job.temporal_shift = temporal_shift;
+  job.temporal_shift = parse_temporal_shift(temporal_shift).value();
   job.scene = "cbox_demo.xml";
   job.frames = frames;
   job.fps = 24;
   job.width = job.height = 16;
   job.spp = 4;
   job.seed = 5;
-  job.integrator = "tgpt";
-  job.reconstruction.method = "l2";
+  job.integrator = Integrator::kTgpt;
+  job.reconstruction.method = ReconMethod::kL2;
   job.reconstruction.window = window;
   if (animated) {
     Track box;

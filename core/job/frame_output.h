@@ -1,0 +1,51 @@
+// What a job's stages hand on for each frame: the buffers of stage 1 (render)
+// and the final frame of stage 2 (finalize), each with its statistics.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/image/image.h"
+
+namespace gdvr {
+
+struct FrameStats {
+  int frame = 0;
+  double render_seconds = 0;
+  double reconstruct_seconds = 0;
+  // The feature buffers (albedo, N, Z; core/render/feature_buffers.h): a fixed
+  // cost on top of render_seconds, outside the time budget; 0 when the job's
+  // outputs.exr_layers selects none of them (they are not rendered then).
+  double feature_seconds = 0;
+  int spp = 0;
+  uint64_t samples = 0;        // camera samples
+  uint64_t rays = 0;           // every ray traced (closest hit and shadow)
+  // Rays whose results enter a non-zero temporal gradient (tgpt): motion
+  // vectors and temporal offsets. 0 for pt, gpt and static frame pairs.
+  uint64_t temporal_rays = 0;
+  double samples_per_second = 0;
+  double rays_per_second = 0;
+  std::vector<std::string> left_out;  // what the pipeline skipped, and why
+  // Filled by the output stage (core/job/job_outputs.h):
+  double rel_mse = -1;             // per-pixel relMSE against the job's reference; -1: none
+  double rel_mse_global = -1;      // global relMSE against it; -1: none
+  double shift_failure_rate = -1;  // mean of the shift_failure_rate layer; -1: not gradient-domain
+};
+
+// Stage 1: every layer the integrator produces before reconstruction (pt: the
+// image; gpt: primal, dx, dy, ...), and the render statistics.
+struct FrameBuffers {
+  int frame = 0;
+  LayeredImage layers;
+  FrameStats stats;  // render-stage statistics; finalize adds its own
+};
+
+// Stage 2: the final frame.
+struct FrameOutput {
+  int frame = 0;
+  LayeredImage image;  // unnamed layer = the final RGB image
+  FrameStats stats;
+};
+
+}  // namespace gdvr

@@ -1,0 +1,76 @@
+// One integrator as a job runs it (core/job/job_runner.h), in the two stages
+// a render farm may run in separate processes:
+//   1. render: a frame to its buffers, every layer the integrator produces
+//      before reconstruction;
+//   2. finalize: buffers to the final frame (reconstruction, direct light added).
+// Each integrator implements it in its own file of this folder; the job
+// runner, the farm and the server see only this interface, so adding an
+// integrator touches this folder only.
+#pragma once
+
+#include <climits>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/job/frame_output.h"
+#include "core/job/job_spec.h"
+#include "core/render/frame_scene.h"
+#include "core/render/pt_integrator.h"
+#include "core/scene/scene.h"
+#include "core/util/status.h"
+
+namespace gdvr {
+
+// What stage 1 of one frame works with; the job runner has moved the scene to
+// the frame's time.
+struct FrameRenderContext {
+  const FrameScene& scene;
+  const Scene& description;  // the scene description at the frame's time
+  const FrameRenderSettings& settings;
+  const std::vector<bool>& animated_shapes;  // by shape index
+  // The description at another frame's time, from `description` (T-GPT's
+  // neighbours).
+  std::function<Status(int frame, Scene* description)> describe_frame;
+  const FrameRenderControl& control;
+};
+
+class IntegratorRunner {
+ public:
+  virtual ~IntegratorRunner() = default;
+
+  // ---- Stage 1 ----
+  // `frame`'s buffers into out->layers, and into out->stats what this
+  // integrator measured (render_seconds, spp, rays, temporal_rays) and left out.
+  virtual Status render(const FrameRenderContext& context, int frame, FrameBuffers* out) = 0;
+
+  // ---- Stage 2 ----
+  // The frames whose buffers finalizing `frame` reads, ascending.
+  virtual std::vector<int> frames_needed(int frame) const { return {frame}; }
+  // `buffers` must hold frames_needed(frame). Frames finalized in increasing
+  // order share the work they have in common (T-GPT's windows are solved once).
+  virtual Expected<FrameOutput> finalize(int frame, const std::map<int, FrameBuffers>& buffers) = 0;
+  // Whether a streaming run must keep the buffers of `frame` it holds once
+  // every frame before `next_out` is final (next_out = INT_MAX: all are).
+  virtual bool buffers_needed(int frame, int next_out) const { return frame >= next_out; }
+  // Reconstruction windows solved so far (0 for an integrator without them).
+  virtual int windows_solved() const { return 0; }
+};
+
+// The job's integrator, its settings built from the job and checked (errors
+// name the job's field). `job_frames`: the job's frame range, ascending.
+Expected<std::unique_ptr<IntegratorRunner>> make_integrator_runner(const JobSpec& job, std::vector<int> job_frames);
+
+// The statistics every integrator's frame result carries (seconds, spp, rays,
+// invalid_samples), with the dropped samples said in left_out as `dropped`.
+template <typename FrameResult>
+void record_render_stats(const FrameResult& r, const char* dropped, FrameStats* stats) {
+  stats->render_seconds = r.seconds;
+  stats->spp = r.spp;
+  stats->rays = r.rays;
+  if (r.invalid_samples > 0) stats->left_out.push_back(std::to_string(r.invalid_samples) + " " + dropped);
+}
+
+}  // namespace gdvr

@@ -1,0 +1,179 @@
+#include "core/job/integrators/tgpt_runner.h"
+
+#include "core/job/integrators/gradient_domain_frame.h"
+#include "core/render/feature_buffers.h"
+#include "core/temporal/change_detection.h"
+#include "core/temporal/pass_schedule.h"
+#include "core/temporal/temporal_buffers.h"
+#include "core/temporal/tgpt_frame.h"
+
+namespace gdvr {
+
+Expected<std::unique_ptr<TgptRunner>> TgptRunner::create(const JobSpec& job, std::vector<int> job_frames) {
+  TgptSettings s;
+  s.gpt = TgptSettings::gpt_defaults_for(job.shift);
+  s.temporal_shift = job.temporal_shift;
+  s.recon = job_recon_settings(job.reconstruction, s.recon);
+  s.window = job.reconstruction.window;
+  GDVR_RETURN_IF_ERROR(s.validate().with_context("job: "));
+  return std::unique_ptr<TgptRunner>(new TgptRunner(std::move(s), job.reconstruction.clamp_negative, std::move(job_frames)));
+}
+
+TgptRunner::TgptRunner(TgptSettings settings, bool clamp_negative, std::vector<int> job_frames)
+    : settings_(std::move(settings)), clamp_negative_(clamp_negative), windows_(settings_, std::move(job_frames)) {}
+
+// Two half passes, motion fields where the pair changes.
+Status TgptRunner::render(const FrameRenderContext& context, int frame, FrameBuffers* out) {
+  const std::vector<int>& frames = windows_.frames();
+  const int pos = windows_.position(frame);
+  if (pos < 0) return invalid_argument("frame " + std::to_string(frame) + " is not in the job's frame range");
+  // The neighbours' animated descriptions (copies share meshes and textures).
+  Scene prev_desc, next_desc;
+  TgptNeighbourhood nb;
+  nb.at_t = &context.description;
+  if (pos > 0) {
+    GDVR_RETURN_IF_ERROR(context.describe_frame(frames[size_t(pos) - 1], &prev_desc));
+    nb.prev = &prev_desc;
+    nb.to_prev = detect_changes(prev_desc, context.description);
+  }
+  if (size_t(pos) + 1 < frames.size()) {
+    GDVR_RETURN_IF_ERROR(context.describe_frame(frames[size_t(pos) + 1], &next_desc));
+    nb.next = &next_desc;
+    nb.to_next = detect_changes(context.description, next_desc);
+  }
+  // The path-space temporal shift traces in the neighbours' scenes: keep one
+  // FrameScene per side, moved to the neighbour's time (built once).
+  if (settings_.temporal_shift == TemporalShiftMapping::kReconnect) {
+    auto scene_at = [&](const Scene& desc, std::unique_ptr<FrameScene>* slot) -> Status {
+      if (*slot) return (*slot)->update(desc);
+      auto fs = FrameScene::create(desc, context.animated_shapes);
+      if (!fs.ok()) return fs.status();
+      *slot = std::move(fs.value());
+      return Status::Ok();
+    };
+    if (nb.prev && nb.to_prev.any()) {
+      GDVR_RETURN_IF_ERROR(scene_at(prev_desc, &scene_prev_));
+      nb.prev_scene = scene_prev_.get();
+    }
+    if (nb.next && nb.to_next.any()) {
+      GDVR_RETURN_IF_ERROR(scene_at(next_desc, &scene_next_));
+      nb.next_scene = scene_next_.get();
+    }
+  }
+  // Across a static pair, pass A of t replays pass B of t−1 in an identical
+  // scene: same numbers, same image; copy it when we rendered it (and no
+  // time budget made the pass sizes differ).
+  const GradientFilmBuffers* reuse = nullptr;
+  if (pos > 0 && last_b_frame_ == frames[size_t(pos) - 1] && !nb.to_prev.any() && context.settings.time_budget_s <= 0)
+    reuse = &last_b_;
+  auto result = render_tgpt_frame(context.scene, context.settings, settings_, tgpt_pass_streams(frames, size_t(pos)),
+                                  nb, reuse, context.control);
+  if (!result.ok()) return result.status();
+  TgptFrameRender& r = result.value();
+  last_b_frame_ = INT_MIN;
+  if (nb.next && !nb.to_next.any()) {
+    last_b_ = r.b;
+    last_b_frame_ = frame;
+  }
+  FrameStats& st = out->stats;
+  record_render_stats(r, "non-finite samples or gradients dropped", &st);
+  st.temporal_rays = r.temporal_rays;
+  note_unused_glossy_shift(context.scene.scene(), settings_.gpt, &st);
+  for (std::string& s : r.left_out) st.left_out.push_back(std::move(s));
+  out->layers = tgpt_frame_layers(std::move(r));
+  return Status::Ok();
+}
+
+Expected<FrameOutput> TgptRunner::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {
+  auto out = finalize_output(frame, buffers);
+  // Frames come out in increasing order (a later one, out of order, solves
+  // again what it needs): windows ending here are done with.
+  if (out.ok()) windows_.release_through(frame);
+  return out;
+}
+
+Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int, FrameBuffers>& buffers) {
+  const std::vector<int>& frames = windows_.frames();
+  const int pos = windows_.position(frame);
+  if (pos < 0) return invalid_argument("frame " + std::to_string(frame) + " is not in the job's frame range");
+  const int n = int(frames.size());
+  auto layers_of = [&](int f) -> const LayeredImage* {
+    auto it = buffers.find(f);
+    return it == buffers.end() ? nullptr : &it->second.layers;
+  };
+  // The frame and its successor must be here; the windows' other frames only
+  // while their window is not solved yet (the cache reports what is missing).
+  for (int p : {pos, pos + 1})
+    if (p < n && !layers_of(frames[size_t(p)]))
+      return failed_precondition("finalize: frame " + std::to_string(frame) + " needs the buffers of frame " +
+                                 std::to_string(frames[size_t(p)]));
+  const FrameBuffers& fb = buffers.at(frame);
+  const ImageLayer* direct = fb.layers.find("direct");
+  if (!direct) return invalid_argument("finalize: frame buffers lack the 'direct' layer");
+
+  ReconStats recon_stats;
+  auto solved = windows_.reconstruct(frame, layers_of, &recon_stats);
+  if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+  Image final_image = std::move(solved.value());
+  const int64_t bad_direct = add_direct_clamped(direct->image, clamp_negative_, &final_image);
+
+  FrameOutput out;
+  out.frame = frame;
+  out.stats = fb.stats;
+  out.stats.reconstruct_seconds = recon_stats.seconds;
+  if (bad_direct > 0)
+    out.stats.left_out.push_back(std::to_string(bad_direct) + " non-finite direct-light values dropped");
+  out.image.add("", {"R", "G", "B"}, std::move(final_image));
+  auto add_estimate = [&](const char* name) -> Status {
+    auto est = tgpt_frame_estimate(fb.layers, name);
+    if (!est.ok()) return est.status();
+    out.image.add(name, {"R", "G", "B"}, std::move(est.value()));
+    return Status::Ok();
+  };
+  if (n == 1) {
+    // A single-frame job never forms temporal buffers: no dt layers.
+    for (const char* name : {"primal", "dx", "dy"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
+    out.image.layers.push_back(*direct);
+    for (const char* name : {"primal_var", "dx_var", "dy_var"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
+    if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
+    copy_feature_layers(fb.layers, &out.image);
+    out.stats.left_out.push_back("temporal gradients and buffers: single-frame job");
+    zero_non_finite_layers(&out);
+    return out;
+  }
+  // The frame's own temporal layers (towards the next frame of the job).
+  TemporalGradients tg;
+  if (const LayeredImage* next = pos + 1 < n ? layers_of(frames[size_t(pos) + 1]) : nullptr) {
+    auto g = temporal_gradients(fb.layers, *next, settings_);
+    if (!g.ok()) return g.status().with_context("frame " + std::to_string(frame) + ": ");
+    tg = std::move(g.value());
+  } else {
+    const int w = direct->image.width(), h = direct->image.height();
+    for (Image* im : {&tg.dt, &tg.dxdt, &tg.dydt, &tg.dt_var, &tg.dxdt_var, &tg.dydt_var}) *im = Image(w, h, 3);
+    tg.failure_rate = Image(w, h, 1);
+  }
+  for (const char* name : {"primal", "dx", "dy"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
+  out.image.add("dt", {"R", "G", "B"}, std::move(tg.dt));
+  out.image.add("dxdt", {"R", "G", "B"}, std::move(tg.dxdt));
+  out.image.add("dydt", {"R", "G", "B"}, std::move(tg.dydt));
+  out.image.layers.push_back(*direct);
+  for (const char* name : {"primal_var", "dx_var", "dy_var"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
+  out.image.add("dt_var", {"R", "G", "B"}, std::move(tg.dt_var));
+  out.image.add("dxdt_var", {"R", "G", "B"}, std::move(tg.dxdt_var));
+  out.image.add("dydt_var", {"R", "G", "B"}, std::move(tg.dydt_var));
+  if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
+  out.image.add("temporal_failure_rate", {"Y"}, std::move(tg.failure_rate));
+  if (const ImageLayer* l = fb.layers.find("motion")) out.image.layers.push_back(*l);
+  else out.image.add("motion", {"X", "Y", "V"}, Image(direct->image.width(), direct->image.height(), 3));
+  copy_feature_layers(fb.layers, &out.image);
+  if (settings_.window == 1)
+    out.stats.left_out.push_back("temporal terms in the solve: window of 1 frame (spatial reconstruction)");
+  if (!settings_.motion_vectors) out.stats.left_out.push_back("temporal masks: motion vectors off");
+  if (recon_stats.total_non_finite() > 0)
+    out.stats.left_out.push_back(std::to_string(recon_stats.total_non_finite()) +
+                                 " non-finite constraints dropped by the reconstruction");
+  zero_non_finite_layers(&out);
+  return out;
+}
+
+}  // namespace gdvr

@@ -1,0 +1,44 @@
+// Temporal gradient-domain path tracing in a job (docs/tgpt.md): stage 1
+// renders each frame as two half passes that replay the neighbouring frames'
+// random numbers, plus motion fields where a frame pair changes; stage 2
+// forms the temporal gradients and reconstructs the shot in sliding windows
+// (core/temporal/temporal_window.h), which own the schedule of what each
+// frame needs.
+#pragma once
+
+#include <climits>
+#include <memory>
+
+#include "core/gradient/gradient_film.h"
+#include "core/job/integrators/integrator_runner.h"
+#include "core/temporal/temporal_window.h"
+#include "core/temporal/tgpt_settings.h"
+
+namespace gdvr {
+
+class TgptRunner final : public IntegratorRunner {
+ public:
+  // The job's shifts and reconstruction as T-GPT settings, checked.
+  static Expected<std::unique_ptr<TgptRunner>> create(const JobSpec& job, std::vector<int> job_frames);
+
+  Status render(const FrameRenderContext& context, int frame, FrameBuffers* out) override;
+  std::vector<int> frames_needed(int frame) const override { return windows_.frames_needed(frame); }
+  Expected<FrameOutput> finalize(int frame, const std::map<int, FrameBuffers>& buffers) override;
+  bool buffers_needed(int frame, int next_out) const override { return windows_.buffers_needed(frame, next_out); }
+  int windows_solved() const override { return windows_.windows_solved(); }
+
+ private:
+  TgptRunner(TgptSettings settings, bool clamp_negative, std::vector<int> job_frames);
+  Expected<FrameOutput> finalize_output(int frame, const std::map<int, FrameBuffers>& buffers);
+
+  const TgptSettings settings_;
+  const bool clamp_negative_;
+  TemporalWindowCache windows_;  // the job's frames, and stage 2's solved windows
+
+  // ---- Stage 1, across the frames of one process ----
+  std::unique_ptr<FrameScene> scene_prev_, scene_next_;  // temporal_shift reconnect: the neighbours' scenes
+  GradientFilmBuffers last_b_;  // pass B of frame last_b_frame_, kept only across a static pair
+  int last_b_frame_ = INT_MIN;
+};
+
+}  // namespace gdvr
