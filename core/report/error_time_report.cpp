@@ -348,6 +348,9 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
   job.time_budget_s = m.denoised ? std::max(budget - denoising.overhead.total(), 1e-6) : budget;
   job.spp = 0;  // passes of 1 spp until the budget is spent
   job.reference.clear();
+  // Only the denoised methods read the feature buffers: the others leave
+  // them out (an EXR layer selection without them skips their pass).
+  if (!m.denoised) job.outputs.exr_layers = {"primal"};
 
   row->method = m.name;
   row->integrator = integrator_name(m.integrator);
