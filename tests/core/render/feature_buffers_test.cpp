@@ -11,6 +11,7 @@
 
 #include "core/render/perspective_camera.h"
 #include "core/scene/mitsuba_loader.h"
+#include "tests/core/render/xml_scene.h"
 
 namespace gdvr {
 namespace {
@@ -38,22 +39,8 @@ std::string plane(float z, const std::string& bsdf, bool flip = false, const std
 const char* const kPlaneColour = "<bsdf type=\"diffuse\"><rgb name=\"reflectance\" value=\"0.2, 0.4, 0.6\"/></bsdf>";
 const Rgb kPlaneAlbedo(0.2f, 0.4f, 0.6f);
 
-struct Loaded {
-  Scene desc;
-  std::unique_ptr<FrameScene> scene;
-};
-
-Loaded load(const std::string& xml) {
-  Loaded l;
-  auto s = load_mitsuba_scene_from_string(xml, ".", {});
-  EXPECT_TRUE(s.ok()) << s.status().to_string();
-  if (!s.ok()) return l;
-  l.desc = std::move(s.value());
-  auto fs = FrameScene::create(l.desc, {});
-  EXPECT_TRUE(fs.ok()) << fs.status().to_string();
-  if (fs.ok()) l.scene = std::move(fs.value());
-  return l;
-}
+using Loaded = test::XmlScene;
+Loaded load(const std::string& xml) { return test::load_xml_scene(xml); }
 
 FeatureBuffers features(const FrameScene& scene, int threads = 2, bool hide_emitters = false) {
   FrameRenderSettings frame;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/render/frame_scene.h"
+#include "tests/core/render/xml_scene.h"
 #include "core/scene/mitsuba_loader.h"
 
 namespace gdvr {
@@ -24,22 +25,8 @@ std::string one_shape_xml(const std::string& shape, const std::string& alphas) {
 const char* kAnisotropic = R"(<float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/>)";
 const char* kIsotropic = R"(<float name="alpha" value="0.05"/>)";
 
-struct Loaded {
-  Scene desc;
-  std::unique_ptr<FrameScene> scene;
-};
-
-Loaded load(const std::string& xml) {
-  Loaded l;
-  auto s = load_mitsuba_scene_from_string(xml, ".", {});
-  EXPECT_TRUE(s.ok()) << s.status().to_string();
-  if (!s.ok()) return l;
-  l.desc = s.value();
-  auto fs = FrameScene::create(l.desc, {});
-  EXPECT_TRUE(fs.ok()) << fs.status().to_string();
-  if (fs.ok()) l.scene = std::move(fs.value());
-  return l;
-}
+using Loaded = test::XmlScene;
+Loaded load(const std::string& xml) { return test::load_xml_scene(xml); }
 
 void expect_near(Vec3f a, Vec3f b, const char* what) {
   EXPECT_NEAR(a.x, b.x, 1e-4f) << what;
