@@ -3,6 +3,16 @@
 // per-constraint weights w = β / (|r| + ε_k), ε_k = ε_0 · decay^(k−1), where r
 // is the constraint's residual at the previous solution and β the term weight
 // (α for the primal). Each round warm-starts CG from the previous solution.
+//
+// L1 tends to the median of its constraints, and where a few rare paths carry
+// the light (a handful of bright samples among black ones at a few spp) the
+// median is far below the mean: the result loses energy, a bias the L2 solve
+// does not have (its total equals the primal's). With
+// ReconSettings::l1_low_frequencies_from_primal the L1 result gets back the low
+// frequencies of what it left of the primal, smoothed by the L2 problem's own
+// operator: x += argmin_y α²‖y − (I_g − x)‖² + Σ‖H y‖² (every gradient
+// target 0, the same masks). It keeps L1's edges and the primal's unbiased
+// local mean; docs/reconstruction.md, "L1 and its energy", has the numbers.
 #include <algorithm>
 #include <cmath>
 
@@ -29,6 +39,15 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
   std::vector<Term> active;
   for (Term t : kAllTerms)
     if (layout.present(t) && (!is_temporal(t) || temporal) && base[term_index(t)] > 0) active.push_back(t);
+
+  // The low-frequency correction's operator (the L2 problem's), built once.
+  const bool low_frequencies = settings.l1_low_frequencies_from_primal && base[term_index(Term::kPrimal)] > 0;
+  PoissonSystem smooth = low_frequencies ? screened_poisson_system(layout, settings) : PoissonSystem(g, temporal);
+  Field smooth_inv_diag;
+  if (low_frequencies) {
+    smooth.diagonal(&smooth_inv_diag);
+    invert_diagonal(&smooth_inv_diag);
+  }
 
   Field b, inv_diag, residual;
   for (int c = 0; c < layout.channels; ++c) {
@@ -87,6 +106,18 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
       result->stats.cg_iterations += r.iterations;
       if (k == settings.l1_outer_iterations)
         result->stats.relative_residual = std::max(result->stats.relative_residual, r.relative_residual);
+    }
+    if (low_frequencies) {
+      const Field& primal = d[term_index(Term::kPrimal)];
+      Field left(x.size()), y(x.size(), 0.0f), b2;
+      for (size_t i = 0; i < x.size(); ++i) left[i] = primal[i] - x[i];
+      std::array<const Field*, kTermCount> only_primal{};
+      only_primal[term_index(Term::kPrimal)] = &left;
+      smooth.rhs(only_primal, &b2);
+      const PcgResult r =
+          solve_pcg(smooth, b2, smooth_inv_diag, &y, settings.l2_max_iterations, settings.l2_tolerance);
+      result->stats.cg_iterations += r.iterations;
+      for (size_t i = 0; i < x.size(); ++i) x[i] += y[i];
     }
     scatter_channel(g, x, c, result);
   }

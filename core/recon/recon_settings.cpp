@@ -50,7 +50,9 @@ std::string ReconSettings::to_string() const {
   s << "} l2_max_iterations=" << l2_max_iterations << " l2_tolerance=" << l2_tolerance
     << " l1_outer_iterations=" << l1_outer_iterations << " l1_inner_iterations=" << l1_inner_iterations
     << " l1_inner_tolerance=" << l1_inner_tolerance << " l1_epsilon0=" << l1_epsilon0
-    << " l1_epsilon_decay=" << l1_epsilon_decay << " cv_iterations=" << cv_iterations
+    << " l1_epsilon_decay=" << l1_epsilon_decay
+    << " l1_low_frequencies_from_primal=" << (l1_low_frequencies_from_primal ? "true" : "false")
+    << " cv_iterations=" << cv_iterations
     << " variance_floor=" << variance_floor;
   return s.str();
 }

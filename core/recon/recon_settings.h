@@ -55,6 +55,10 @@ struct ReconSettings {
   double l1_inner_tolerance = 1e-3;
   double l1_epsilon0 = 0.05;
   double l1_epsilon_decay = 0.5;
+  // Give the L1 result back the low frequencies of what it left of the primal
+  // (core/recon/irls_l1.cpp): L1 alone tends to the median and loses the
+  // energy of rare bright paths (−50 % on a room lit through a gap at 4 spp).
+  bool l1_low_frequencies_from_primal = true;
 
   // ---- Control variates (uniform / weighted) ----
   int cv_iterations = 50;

@@ -11,23 +11,24 @@
 
 namespace gdvr {
 
-Status solve_screened_poisson_l2(const GradientWindow& window, const ConstraintLayout& layout,
-                                 const ReconSettings& settings, ReconResult* result) {
-  const Grid& g = layout.grid;
-
-  // ---- Weights, shared by all channels ----
+PoissonSystem screened_poisson_system(const ConstraintLayout& layout, const ReconSettings& settings) {
   // Constant per term, so the operator keeps one validity byte per pixel
-  // instead of six float arrays. Dividing the objective by s = max(1, α²)
-  // changes nothing mathematically but keeps every float weight ≤ 1 for huge α
-  // (α² = 1e40 would overflow float).
+  // instead of six float arrays.
   const double alpha2 = settings.alpha * settings.alpha * settings.term_weight(Term::kPrimal);
   const double s = std::max(1.0, alpha2);
   std::array<float, kTermCount> w{};
   for (Term t : kAllTerms)
     if (!is_temporal(t) || layout.temporal)
       w[term_index(t)] = float((t == Term::kPrimal ? alpha2 : settings.term_weight(t)) / s);
-  const PoissonSystem A(g, layout.temporal, w, w[term_index(Term::kPrimal)] * kDroppedPrimalWeight,
-                        pack_valid_bits(layout));
+  return PoissonSystem(layout.grid, layout.temporal, w, w[term_index(Term::kPrimal)] * kDroppedPrimalWeight,
+                       pack_valid_bits(layout));
+}
+
+Status solve_screened_poisson_l2(const GradientWindow& window, const ConstraintLayout& layout,
+                                 const ReconSettings& settings, ReconResult* result) {
+  const Grid& g = layout.grid;
+
+  const PoissonSystem A = screened_poisson_system(layout, settings);
   Field inv_diag;
   A.diagonal(&inv_diag);
   invert_diagonal(&inv_diag);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "core/recon/constraint_layout.h"
+#include "core/recon/poisson_operator.h"
 #include "core/recon/recon_result.h"
 #include "core/recon/recon_settings.h"
 
@@ -14,6 +15,13 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
                      ReconResult* result);
 Status solve_control_variates(const GradientWindow& window, const ConstraintLayout& layout,
                               const ReconSettings& settings, ReconResult* result);
+
+// The screened Poisson operator of the L2 problem: a constant weight per term
+// (α² for the primal, the term weights for the rest) on the layout's masks,
+// divided by max(1, α²) so that every float weight stays ≤ 1 for a huge α
+// (the minimiser does not change). The L2 solve uses it, and so does the L1
+// solve's low-frequency correction.
+PoissonSystem screened_poisson_system(const ConstraintLayout& layout, const ReconSettings& settings);
 
 // Copies planar channel c into the result images.
 void scatter_channel(const Grid& grid, const Field& x, int c, ReconResult* result);

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <random>
+
 #include "core/recon/reconstruct.h"
 #include "recon_test_scene.h"
 
@@ -46,6 +49,57 @@ TEST(IrlsL1Test, ConvergesTowardsL2OnCleanData) {
   EXPECT_LT(test::frame_error(r1->frames[0], 0).rms, 0.02);
   EXPECT_GT(r1->stats.cg_iterations, 0);
   EXPECT_EQ(r1->stats.outer_iterations, l1.l1_outer_iterations);
+}
+
+// Light carried by rare paths: the primal of a flat image of value v is v/p
+// at a fraction p of the pixels and 0 elsewhere (unbiased, mean v), the
+// gradients exact (0). L1 alone tends to the median, 0; with the primal's low
+// frequencies given back it keeps the primal's energy, as L2 does.
+TEST(IrlsL1Test, KeepsTheEnergyOfRareBrightSamples) {
+  const int w = 48, h = 40;
+  const float v = 0.3f, p = 0.05f;
+  std::mt19937 rng(3);
+  std::bernoulli_distribution lit(p);
+  for (int frames : {1, 4}) {
+    GradientWindow win;
+    double primal_sum = 0;
+    for (int t = 0; t < frames; ++t) {
+      auto f = std::make_shared<GradientFrame>();
+      for (Term term : kAllTerms) {
+        if (is_temporal(term) && frames == 1) continue;
+        f->buffer(term) = Image(w, h, 3);
+      }
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const float value = lit(rng) ? v / p : 0.0f;
+          for (int c = 0; c < 3; ++c) f->buffer(Term::kPrimal).at(x, y, c) = value;
+          primal_sum += 3.0 * value;
+        }
+      win.frames.push_back(f);
+    }
+    const double primal_mean = primal_sum / (3.0 * w * h * frames);
+    auto mean_of = [&](const ReconResult& r) {
+      double s = 0;
+      for (const Image& im : r.frames)
+        for (float x : im.data()) s += x;
+      return s / (3.0 * w * h * frames);
+    };
+    ReconSettings l1;
+    l1.method = ReconMethod::kL1;
+    ReconSettings median_only = l1;
+    median_only.l1_low_frequencies_from_primal = false;
+    auto kept = reconstruct(win, l1);
+    auto lost = reconstruct(win, median_only);
+    ASSERT_TRUE(kept.ok() && lost.ok());
+    EXPECT_LT(mean_of(*lost), 0.5 * primal_mean) << frames << " frame(s): L1 alone should lose the rare samples";
+    EXPECT_NEAR(mean_of(*kept), primal_mean, 0.03 * primal_mean) << frames << " frame(s)";
+    // And no pixel is left near the fireflies' value: the energy is spread
+    // smoothly, not kept as spikes.
+    float peak = 0;
+    for (const Image& im : kept->frames)
+      for (float x : im.data()) peak = std::max(peak, x);
+    EXPECT_LT(peak, 0.5f * v / p);
+  }
 }
 
 }  // namespace
