@@ -63,7 +63,11 @@ nlohmann::ordered_json frame_json(const WrittenFrame& r) {
           {"render_seconds", s.render_seconds},
           {"reconstruct_seconds", s.reconstruct_seconds},
           {"feature_seconds", s.feature_seconds},
+          {"sampling_seconds", s.sampling_seconds},
+          {"stage1_seconds", s.stage1_seconds},
           {"spp", s.spp},
+          {"pass_a_spp", s.pass_a_spp},
+          {"pass_b_spp", s.pass_b_spp},
           {"samples", s.samples},
           {"rays", s.rays},
           {"temporal_rays", s.temporal_rays},
@@ -91,7 +95,11 @@ Expected<WrittenFrame> parse_frame_entry(const std::string& json_text) {
     s.render_seconds = j.value("render_seconds", 0.0);
     s.reconstruct_seconds = j.value("reconstruct_seconds", 0.0);
     s.feature_seconds = j.value("feature_seconds", 0.0);
+    s.sampling_seconds = j.value("sampling_seconds", 0.0);
+    s.stage1_seconds = j.value("stage1_seconds", 0.0);
     s.spp = j.value("spp", 0);
+    s.pass_a_spp = j.value("pass_a_spp", 0);
+    s.pass_b_spp = j.value("pass_b_spp", 0);
     s.samples = j.value("samples", uint64_t(0));
     s.rays = j.value("rays", uint64_t(0));
     s.temporal_rays = j.value("temporal_rays", uint64_t(0));

@@ -30,6 +30,10 @@ struct JobRunOptions {
   std::string base_dir;          // relative scene paths resolve here
   std::string asset_root;        // when set, scene files must lie inside it
   std::vector<int> skip_frames;  // already final (resume): not rendered again
+  // Seconds the caller spends on each final frame beyond writing it (the
+  // report's denoiser), which a time budget must pay for as well: run_job
+  // measures what on_frame_final takes, and this is its guess until then.
+  double caller_seconds_per_frame = 0;
 };
 
 struct JobCallbacks {
