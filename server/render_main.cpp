@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/io/atomic_file.h"
+#include "core/io/image_io.h"
 #include "core/job/job_flags.h"
 #include "core/job/job_outputs.h"
 #include "core/job/job_runner.h"
@@ -115,6 +116,18 @@ int main(int argc, char** argv) {
                  s.rays_per_second * 1e-6, (fs::path(out_dir) / w->file).string().c_str());
   };
 
+  // Under a time budget the EXRs count too: when a frame's output waits for
+  // later frames (T-GPT's window), the budget reserves what writing one costs,
+  // timed on a rendered frame's buffers (about as many layers as the output).
+  callbacks.estimate_frame_final_seconds = [&](const FrameBuffers& buffers) {
+    const std::string probe = (fs::path(out_dir) / ".time_budget_probe.exr").string();
+    const auto start = std::chrono::steady_clock::now();
+    const Status written = write_exr(probe, buffers.layers);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::error_code ignored;
+    fs::remove(probe, ignored);
+    return written.ok() ? seconds : 0.0;
+  };
   Status st = run_job(job, options, callbacks, &g_cancel);
   if (st.ok() && write_status.ok()) {
     auto video = outputs.value()->finish();

@@ -5,11 +5,14 @@
 
 namespace gdvr {
 
-FrameTimeBudget::FrameTimeBudget(double budget_s, int frames, double finalize_prior_s)
-    : budget_s_(budget_s), frames_(std::max(frames, 1)), finalize_prior_s_(std::max(finalize_prior_s, 0.0)) {}
+FrameTimeBudget::FrameTimeBudget(double budget_s, int frames, double stage2_prior_s, double caller_prior_s)
+    : budget_s_(budget_s),
+      frames_(std::max(frames, 1)),
+      stage2_prior_s_(std::max(stage2_prior_s, 0.0)),
+      caller_prior_s_(std::max(caller_prior_s, 0.0)) {}
 
 double FrameTimeBudget::finalize_seconds_per_frame() const {
-  return finalized_frames_ > 0 ? finalize_seconds_ / finalized_frames_ : finalize_prior_s_;
+  return finalized_frames_ > 0 ? finalize_seconds_ / finalized_frames_ : stage2_prior_s_ + caller_prior_s_;
 }
 
 // Wall time spent so far, with stage 2's lumps replaced by their rate per

@@ -43,10 +43,11 @@ class FrameTimeBudget {
   // Frames whose sampling costs the seconds-per-sample estimate averages.
   static constexpr int kCostFrames = 4;
 
-  // `budget_s` seconds per frame for `frames` frames. `finalize_prior_s`: the
-  // predicted seconds per frame of stage 2 and what the caller does with a
-  // final frame, used until the first finalized frame is measured.
-  FrameTimeBudget(double budget_s, int frames, double finalize_prior_s = 0);
+  // `budget_s` seconds per frame for `frames` frames. `stage2_prior_s` and
+  // `caller_prior_s`: the predicted seconds per frame of stage 2 and of what
+  // the caller does with a final frame, used until the first finalized frame
+  // is measured (their sum is the rate until then).
+  FrameTimeBudget(double budget_s, int frames, double stage2_prior_s = 0, double caller_prior_s = 0);
 
   double budget_s() const { return budget_s_; }
 
@@ -60,10 +61,11 @@ class FrameTimeBudget {
   void end_frame(double now);
   // Stage 2 finalized `frames` frames and handed them on in `seconds`.
   void record_finalize(int frames, double seconds);
-  // A better guess of stage 2's seconds per frame than the one given at the
-  // start (T-GPT calibrates its window solve on the first frame's buffers);
-  // still replaced by the measured rate once frames are finalized.
-  void set_finalize_prior(double seconds_per_frame) { finalize_prior_s_ = seconds_per_frame > 0 ? seconds_per_frame : 0; }
+  // Better guesses than those given at the start (T-GPT calibrates its
+  // window solve on the first frame's buffers; a caller may time its output
+  // on them), still replaced by the measured rate once frames are finalized.
+  void set_stage2_prior(double seconds_per_frame) { stage2_prior_s_ = seconds_per_frame > 0 ? seconds_per_frame : 0; }
+  void set_caller_prior(double seconds_per_frame) { caller_prior_s_ = seconds_per_frame > 0 ? seconds_per_frame : 0; }
 
   // ---- The integrator, between plan_frame and end_frame ----
   // Seconds its render (direct-light pass, sampling, motion vectors) may take.
@@ -95,7 +97,7 @@ class FrameTimeBudget {
 
   double budget_s_;
   int frames_;
-  double finalize_prior_s_;
+  double stage2_prior_s_, caller_prior_s_;
 
   int frames_done_ = 0;
   double frame_begin_ = 0, frame_plan_ = 0;

@@ -133,14 +133,15 @@ class JobRenderer {
   IntegratorRunner& runner() { return *pj_.runner; }
 
   // The job's time budget over `frames` frames (none without time_budget_s).
-  // `finalize_prior_s`: what stage 2 and the caller are expected to spend
-  // per frame until a finalized frame is measured; `includes_finalize`
-  // false: this process only renders (a farm task), so stage 2 is not its cost.
-  void start_budget(int frames, double finalize_prior_s, bool includes_finalize) {
+  // `caller_prior_s`: what the caller is expected to spend per final frame
+  // until one is measured; `includes_finalize` false: this process only
+  // renders (a farm task), so stage 2 and the output are not its cost.
+  void start_budget(int frames, double caller_prior_s, bool includes_finalize) {
     if (job_.time_budget_s <= 0) return;
-    double prior = 0;
-    if (includes_finalize) prior = pj_.runner->finalize_seconds_prior(pj_.render, int(pj_.frames.size())) + finalize_prior_s;
-    budget_ = std::make_unique<FrameTimeBudget>(job_.time_budget_s, frames, prior);
+    const double stage2 =
+        includes_finalize ? pj_.runner->finalize_seconds_prior(pj_.render, int(pj_.frames.size())) : 0.0;
+    budget_ = std::make_unique<FrameTimeBudget>(job_.time_budget_s, frames, stage2,
+                                                includes_finalize ? caller_prior_s : 0.0);
   }
   FrameTimeBudget* budget() { return budget_.get(); }
   // Seconds since the job began (scene loading included: the user waits for it).
@@ -364,6 +365,7 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
   // held is bounded by the reconstruction window (1 frame for pt and gpt).
   renderer.value()->start_budget(render_count, options.caller_seconds_per_frame, /* includes_finalize = */ true);
   FrameTimeBudget* budget = renderer.value()->budget();
+  bool caller_probed = false;
   std::map<int, FrameBuffers> buffers;
   for (int frame : schedule.render_order()) {
     if (cancel && cancel->load()) return cancelled("job cancelled");
@@ -386,6 +388,13 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
       ++finalized;
     }
     if (budget) budget->record_finalize(finalized, renderer.value()->clock() - finalize_start);
+    // A frame that cannot come out yet (T-GPT waits for its window): the
+    // caller's work per final frame is unknown until the first does, so it
+    // estimates it on these buffers, once.
+    if (budget && !caller_probed && finalized == 0 && callbacks.estimate_frame_final_seconds) {
+      caller_probed = true;
+      budget->set_caller_prior(callbacks.estimate_frame_final_seconds(buffers.at(frame)));
+    }
     const int next_out = schedule.done() ? INT_MAX : todo[size_t(schedule.next_index())];
     for (int f : schedule.releasable([&](int held) { return runner.buffers_needed(held, next_out); }))
       buffers.erase(f);

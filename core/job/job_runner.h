@@ -39,6 +39,13 @@ struct JobRunOptions {
 struct JobCallbacks {
   std::function<void(const FrameOutput&)> on_frame_final;  // in frame order
   std::function<void(const JobProgress&)> on_progress;
+  // Optional, for a time budget: the seconds on_frame_final will take per
+  // frame, estimated on a rendered frame's buffers (gdvr-render times writing
+  // them). Called once, when the first frame rendered cannot be finalized at
+  // once (T-GPT waits for its window), so that the output of a window's frames
+  // is reserved from the frames before it; where frames come out at once,
+  // their output is measured instead.
+  std::function<double(const FrameBuffers&)> estimate_frame_final_seconds;
 };
 
 // Returns kCancelled if *cancel became true (checked once per tile).

@@ -169,7 +169,7 @@ void TgptRunner::calibrate_window_solve(const LayeredImage& layers, FrameTimeBud
   budget->record_one_off(seconds);
   if (!solved.ok()) return;
   const double per_frame = seconds * window_over_spatial_cost(settings_.recon.method) * window_frames_per_frame();
-  budget->set_finalize_prior(per_frame);
+  budget->set_stage2_prior(per_frame);
 }
 
 Expected<FrameOutput> TgptRunner::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {
