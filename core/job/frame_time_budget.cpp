@@ -11,6 +11,12 @@ FrameTimeBudget::FrameTimeBudget(double budget_s, int frames, double stage2_prio
       stage2_prior_s_(std::max(stage2_prior_s, 0.0)),
       caller_prior_s_(std::max(caller_prior_s, 0.0)) {}
 
+FrameTimeBudget FrameTimeBudget::stage1_only(double budget_s, int frames) {
+  FrameTimeBudget budget(budget_s, frames);
+  budget.pays_stage2_ = false;
+  return budget;
+}
+
 double FrameTimeBudget::finalize_seconds_per_frame() const {
   return finalized_frames_ > 0 ? finalize_seconds_ / finalized_frames_ : stage2_prior_s_ + caller_prior_s_;
 }

@@ -48,8 +48,12 @@ class FrameTimeBudget {
   // the caller does with a final frame, used until the first finalized frame
   // is measured (their sum is the rate until then).
   FrameTimeBudget(double budget_s, int frames, double stage2_prior_s = 0, double caller_prior_s = 0);
+  // A process that only renders (a farm's render task): stage 2 runs
+  // elsewhere, so nothing is reserved for it and a prior is not calibrated.
+  static FrameTimeBudget stage1_only(double budget_s, int frames);
 
   double budget_s() const { return budget_s_; }
+  bool pays_stage2() const { return pays_stage2_; }
 
   // ---- The job runner, on its wall clock (seconds since the job began) ----
   // A frame's stage 1 begins; the fixed costs it spends before its
@@ -64,8 +68,12 @@ class FrameTimeBudget {
   // Better guesses than those given at the start (T-GPT calibrates its
   // window solve on the first frame's buffers; a caller may time its output
   // on them), still replaced by the measured rate once frames are finalized.
-  void set_stage2_prior(double seconds_per_frame) { stage2_prior_s_ = seconds_per_frame > 0 ? seconds_per_frame : 0; }
-  void set_caller_prior(double seconds_per_frame) { caller_prior_s_ = seconds_per_frame > 0 ? seconds_per_frame : 0; }
+  void set_stage2_prior(double seconds_per_frame) {
+    if (pays_stage2_) stage2_prior_s_ = seconds_per_frame > 0 ? seconds_per_frame : 0;
+  }
+  void set_caller_prior(double seconds_per_frame) {
+    if (pays_stage2_) caller_prior_s_ = seconds_per_frame > 0 ? seconds_per_frame : 0;
+  }
 
   // ---- The integrator, between plan_frame and end_frame ----
   // Seconds its render (direct-light pass, sampling, motion vectors) may take.
@@ -98,6 +106,7 @@ class FrameTimeBudget {
   double budget_s_;
   int frames_;
   double stage2_prior_s_, caller_prior_s_;
+  bool pays_stage2_ = true;
 
   int frames_done_ = 0;
   double frame_begin_ = 0, frame_plan_ = 0;

@@ -138,10 +138,12 @@ class JobRenderer {
   // renders (a farm task), so stage 2 and the output are not its cost.
   void start_budget(int frames, double caller_prior_s, bool includes_finalize) {
     if (job_.time_budget_s <= 0) return;
-    const double stage2 =
-        includes_finalize ? pj_.runner->finalize_seconds_prior(pj_.render, int(pj_.frames.size())) : 0.0;
-    budget_ = std::make_unique<FrameTimeBudget>(job_.time_budget_s, frames, stage2,
-                                                includes_finalize ? caller_prior_s : 0.0);
+    if (!includes_finalize) {
+      budget_ = std::make_unique<FrameTimeBudget>(FrameTimeBudget::stage1_only(job_.time_budget_s, frames));
+      return;
+    }
+    const double stage2 = pj_.runner->finalize_seconds_prior(pj_.render, int(pj_.frames.size()));
+    budget_ = std::make_unique<FrameTimeBudget>(job_.time_budget_s, frames, stage2, caller_prior_s);
   }
   FrameTimeBudget* budget() { return budget_.get(); }
   // Seconds since the job began (scene loading included: the user waits for it).

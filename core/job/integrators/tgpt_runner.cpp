@@ -114,7 +114,8 @@ Status TgptRunner::render(const FrameRenderContext& context, int frame, FrameBuf
   note_unused_glossy_shift(context.scene.scene(), settings_.gpt, &st);
   for (std::string& s : r.left_out) st.left_out.push_back(std::move(s));
   out->layers = tgpt_frame_layers(std::move(r));
-  if (context.budget && !solve_calibrated_) calibrate_window_solve(out->layers, context.budget);
+  if (context.budget && context.budget->pays_stage2() && !solve_calibrated_)
+    calibrate_window_solve(out->layers, context.budget);
   return Status::Ok();
 }
 

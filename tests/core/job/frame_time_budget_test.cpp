@@ -174,5 +174,23 @@ TEST(FrameTimeBudgetTest, CostPerSampleAveragesTheRecentFrames) {
   EXPECT_DOUBLE_EQ(budget.seconds_per_sample(), 0.2);  // only the last kCostFrames frames count
 }
 
+// A farm's render task: stage 2 runs in another process, so nothing is
+// reserved for it, whatever a runner would calibrate.
+TEST(FrameTimeBudgetTest, RenderOnlyTasksReserveNothingForStage2) {
+  FrameTimeBudget budget = FrameTimeBudget::stage1_only(1.0, 4);
+  EXPECT_FALSE(budget.pays_stage2());
+  budget.set_stage2_prior(0.4);
+  budget.set_caller_prior(0.1);
+  budget.begin_frame(0);
+  budget.plan_frame(0);
+  EXPECT_DOUBLE_EQ(budget.render_seconds(), 1.0);
+  FrameTimeBudget full(1.0, 4);
+  full.set_stage2_prior(0.4);
+  full.set_caller_prior(0.1);
+  full.begin_frame(0);
+  full.plan_frame(0);
+  EXPECT_DOUBLE_EQ(full.render_seconds(), 0.5);
+}
+
 }  // namespace
 }  // namespace gdvr
