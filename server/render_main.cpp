@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "core/io/atomic_file.h"
-#include "core/io/image_io.h"
 #include "core/job/job_flags.h"
 #include "core/job/job_outputs.h"
 #include "core/job/job_runner.h"
@@ -120,13 +119,7 @@ int main(int argc, char** argv) {
   // later frames (T-GPT's window), the budget reserves what writing one costs,
   // timed on a rendered frame's buffers (about as many layers as the output).
   callbacks.estimate_frame_final_seconds = [&](const FrameBuffers& buffers) {
-    const std::string probe = (fs::path(out_dir) / ".time_budget_probe.exr").string();
-    const auto start = std::chrono::steady_clock::now();
-    const Status written = write_exr(probe, buffers.layers);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::error_code ignored;
-    fs::remove(probe, ignored);
-    return written.ok() ? seconds : 0.0;
+    return outputs.value()->estimate_write_seconds(buffers.layers);
   };
   Status st = run_job(job, options, callbacks, &g_cancel);
   if (st.ok() && write_status.ok()) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -242,6 +243,15 @@ Status JobOutputs::validate(const JobSpec& job, const Options& options, int firs
     if (!main_rgb(*img)) return invalid_argument("reference: '" + ref + "' has no RGB layer");
   }
   return Status::Ok();
+}
+
+double JobOutputs::estimate_write_seconds(const LayeredImage& layers) const {
+  const std::string probe = temporary_path_for(dir_ + "/time_budget_probe.exr");
+  const auto start = std::chrono::steady_clock::now();
+  const Status written = write_exr(probe, layers);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  discard_temporary(probe);
+  return written.ok() ? seconds : 0.0;
 }
 
 Expected<std::unique_ptr<JobOutputs>> JobOutputs::open(const JobSpec& job, std::vector<int> frames, std::string dir,

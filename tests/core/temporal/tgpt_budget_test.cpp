@@ -149,5 +149,37 @@ TEST(TgptBudgetTest, StaticPairsReusePassAUnderABudget) {
   }
 }
 
+// The caller's work on a final frame counts in the budget. T-GPT's frames
+// come out only when their window is solved, so the caller is asked once,
+// after the first frame, what it will cost; PT's come out at once and are
+// measured instead.
+TEST(TgptBudgetTest, TheCallersOutputIsEstimatedOnceWhereFramesWait) {
+  for (Integrator integrator : {Integrator::kTgpt, Integrator::kPt}) {
+    JobSpec job = budgeted_job("0-3", 0.02);
+    job.integrator = integrator;
+    animate(&job);
+    JobRunOptions options;
+    options.base_dir = demo_dir();
+    options.threads = 2;
+    int asked = 0, final_before_asked = 0, final_frames = 0;
+    JobCallbacks cb;
+    cb.on_frame_final = [&](const FrameOutput&) { ++final_frames; };
+    cb.estimate_frame_final_seconds = [&](const FrameBuffers& buffers) {
+      ++asked;
+      final_before_asked = final_frames;
+      EXPECT_EQ(buffers.frame, 0);
+      return 0.001;
+    };
+    ASSERT_TRUE(run_job(job, options, cb, nullptr).ok());
+    EXPECT_EQ(final_frames, 4);
+    if (integrator == Integrator::kTgpt) {
+      EXPECT_EQ(asked, 1);
+      EXPECT_EQ(final_before_asked, 0);
+    } else {
+      EXPECT_EQ(asked, 0) << "pt's frames come out at once: measured, not estimated";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace gdvr
