@@ -171,8 +171,8 @@ class JobRenderer {
       if (!pj_.animation.empty()) GDVR_RETURN_IF_ERROR(apply_animation(pj_.animation, other / job_.fps, desc));
       return Status::Ok();
     };
-    const FrameRenderContext context{*scene_,  frame_desc_, pj_.render, pj_.animated_shapes, describe_frame,
-                                     control, budget_.get()};
+    const FrameRenderContext context{*scene_, frame_desc_, pj_.render, pj_.animated_shapes,
+                                     describe_frame, control, budget_.get()};
     GDVR_RETURN_IF_ERROR(pj_.runner->render(context, frame, &out));
     for (ImageLayer& l : features.layers) out.layers.layers.push_back(std::move(l));
     st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);
@@ -362,12 +362,13 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
   const int already_done = int(job_frames.size() - todo.size());
   ProgressTracker progress(already_done + render_count, already_done, render_count, callbacks.on_progress);
 
-  // Streaming: after each rendered frame, finalize (in order) every frame whose
-  // buffers are all in, then drop the buffers no later frame reads; what is
-  // held is bounded by the reconstruction window (1 frame for pt and gpt).
+  // A time budget pays for everything from here to the last final frame.
   renderer.value()->start_budget(render_count, options.caller_seconds_per_frame, /* includes_finalize = */ true);
   FrameTimeBudget* budget = renderer.value()->budget();
   bool caller_probed = false;
+  // Streaming: after each rendered frame, finalize (in order) every frame whose
+  // buffers are all in, then drop the buffers no later frame reads; what is
+  // held is bounded by the reconstruction window (1 frame for pt and gpt).
   std::map<int, FrameBuffers> buffers;
   for (int frame : schedule.render_order()) {
     if (cancel && cancel->load()) return cancelled("job cancelled");
