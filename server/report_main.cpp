@@ -18,6 +18,7 @@
 #include "core/io/color_transform.h"
 #include "core/io/shipped_ocio_config.h"
 #include "core/job/job_flags.h"
+#include "core/report/denoiser_comparison.h"
 #include "core/report/error_time_report.h"
 #include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
@@ -132,6 +133,11 @@ int main(int argc, char** argv) {
                 num(r.method == "pt" ? 1.0 : r.equal_time_ratio_global, "%.3g").c_str(),
                 num(r.rel_mse_per_pixel, "%.4g").c_str(),
                 num(r.method == "pt" ? 1.0 : r.equal_time_ratio_per_pixel, "%.3g").c_str(), num(r.flicker, "%.3g").c_str());
+  // The comparison users make before switching: against the best denoised PT.
+  const std::string vs_denoiser =
+      denoiser_comparison_markdown(compare_with_denoisers(report->rows, report->meta.reference_floor),
+                                   report->meta.reference_floor);
+  if (!vs_denoiser.empty()) std::printf("\n%s", vs_denoiser.c_str());
   std::fprintf(stderr, "gdvr-report: wrote %s\n", report->html_path.c_str());
   return 0;
 }

@@ -19,7 +19,9 @@
 #include "core/recon/predicted_improvement.h"
 #include "core/image/error_metrics.h"
 #include "core/render/feature_buffers.h"
+#include "core/report/denoiser_comparison.h"
 #include "core/report/plot.h"
+#include "core/report/reference_noise.h"
 
 namespace gdvr {
 namespace {
@@ -160,8 +162,23 @@ Image main_image(const LayeredImage& li) {
 // ---- Reference: supplied EXR(s) or high-spp PT, cached by key ----
 struct Reference {
   std::map<int, Image> frames;
-  double noise_floor_global = kNoValue;  // expected global relMSE of the reference itself (PT variance)
+  // Per-pixel variance of each frame's mean (PT's `variance` layer), where the
+  // reference has one: the source of its noise floor (core/report/reference_noise.h).
+  std::map<int, Image> variances;
 };
+
+// The reference's noise floor from its variances; unknown (kNoValue) unless every frame has one.
+ReferenceNoiseFloor noise_floor_of(const Reference& ref, const std::vector<int>& frames) {
+  std::vector<const Image*> images, variances;
+  for (int f : frames) {
+    auto v = ref.variances.find(f);
+    if (v == ref.variances.end()) return {};
+    images.push_back(&ref.frames.at(f));
+    variances.push_back(&v->second);
+  }
+  auto floor = reference_noise_floor(images, variances);
+  return floor.ok() ? floor.value() : ReferenceNoiseFloor{};
+}
 
 Status load_supplied_reference(const ErrorTimeReportOptions& o, const std::vector<int>& frames, Reference* ref,
                                ReportMeta* meta) {
@@ -174,6 +191,15 @@ Status load_supplied_reference(const ErrorTimeReportOptions& o, const std::vecto
     auto im = read_rgb_image(path);
     if (!im.ok()) return im.status().with_context("reference frame " + std::to_string(f) + ": ");
     ref->frames[f] = std::move(im.value());
+    // A reference rendered by gdvr (or any EXR with a `variance` layer of the
+    // mean) states its own noise.
+    if (path.size() > 4 && path.compare(path.size() - 4, 4, ".exr") == 0) {
+      auto layers = read_exr(path);
+      if (layers.ok())
+        if (const ImageLayer* v = layers->find("variance"))
+          if (v->image.width() == ref->frames[f].width() && v->image.height() == ref->frames[f].height())
+            ref->variances[f] = v->image;
+    }
   }
   meta->reference_source = "supplied";
   meta->reference_path = o.reference;
@@ -236,26 +262,13 @@ Status build_reference(const ErrorTimeReportOptions& o, const std::vector<int>& 
     if (!st.ok()) return st.with_context("reference: ");
     GDVR_RETURN_IF_ERROR(write_status);
   }
-  double var_sum = 0, ref_sq = 0;
-  bool have_var = true;
   for (int f : frames) {
     auto li = read_exr(frame_path(f));
     if (!li.ok()) return li.status().with_context("reference cache: ");
     ref->frames[f] = main_image(li.value());
     if (ref->frames[f].empty()) return internal_error("reference cache '" + frame_path(f) + "' has no RGB layer");
-    const ImageLayer* v = li->find("variance");
-    if (!v) {
-      have_var = false;
-      continue;
-    }
-    for (float x : v->image.data())
-      if (std::isfinite(x)) var_sum += x;
-    const Image& r = ref->frames[f];
-    for (int y = 0; y < r.height(); ++y)
-      for (int x = 0; x < r.width(); ++x)
-        for (int c = 0; c < 3; ++c) ref_sq += double(r.at(x, y, c)) * r.at(x, y, c);
+    if (const ImageLayer* v = li->find("variance")) ref->variances[f] = v->image;
   }
-  if (have_var && ref_sq > 0) ref->noise_floor_global = var_sum / ref_sq;
   return Status::Ok();
 }
 
@@ -581,6 +594,30 @@ std::string html_report(const ErrorTimeReportOptions& o, const ReportMeta& meta,
       << cell(r.temporal_failure_rate, "%.3f") << "</td></tr>\n";
   }
   h << "</table>\n";
+  // ---- Against the denoiser ----
+  const std::vector<DenoiserComparison> vs_denoiser = compare_with_denoisers(rows, meta.reference_floor);
+  if (!vs_denoiser.empty()) {
+    const DenoiserTargets targets;
+    h << "<h2>Against the best denoised path tracing</h2>\n<p>Each gradient-domain method over the better of "
+         "pt-oidn and pt-sd-oidn at the same budget, figure by figure (&lt; 1: the method wins). Targets: per-pixel "
+         "&le; " << fmt("%g", targets.per_pixel) << "&times;, flicker &le; " << fmt("%g", targets.flicker)
+      << "&times;, global &le; " << fmt("%g", targets.global) << "&times;, at no more than "
+      << fmt("%g", 1 + targets.time_tolerance) << "&times; the baseline's time, with the reference's own noise at most "
+      << fmt("%g", targets.floor_fraction) << "&times; every figure compared (per-pixel "
+      << cell(meta.reference_floor.per_pixel) << ", flicker " << cell(meta.reference_floor.flicker) << ", global "
+      << cell(meta.reference_floor.global) << ").</p>\n<table><tr><th>method</th><th>budget s</th><th>best per-pixel "
+         "baseline</th><th>time</th><th>per-pixel</th><th>flicker</th><th>global</th><th>reference floor</th>"
+         "<th>verdict</th></tr>\n";
+    auto mark = [&](double v, bool ok) { return cell(v, "%.2f") + (ok ? " &#10003;" : " &#10007;"); };
+    for (const DenoiserComparison& c : vs_denoiser)
+      h << "<tr><td class=l>" << html_escape(c.method) << "</td><td>" << cell(c.budget_s, "%g") << "</td><td class=l>"
+        << c.baseline << "</td><td>" << mark(c.seconds_ratio, c.equal_time) << "</td><td>"
+        << mark(c.ratio_per_pixel, c.meets_per_pixel) << "</td><td>" << mark(c.ratio_flicker, c.meets_flicker)
+        << "</td><td>" << mark(c.ratio_global, c.meets_global) << "</td><td class=l>"
+        << (c.floor_well_below ? "well below" : "too close") << "</td><td class=l>"
+        << (c.meets_all() ? "meets" : "misses") << "</td></tr>\n";
+    h << "</table>\n";
+  }
   // ---- Predicted vs achieved ----
   h << "<h2>Predicted against achieved improvement</h2>\n<p>Reconstruction against its own primal (+ direct light), "
        "same samples. Predicted: the frequency-domain model of Kettunen et al. 2015 (docs/reconstruction.md) from the "
@@ -756,9 +793,15 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
   const Image& first_ref = ref.frames.at(frames.front());
   meta.width = first_ref.width();
   meta.height = first_ref.height();
-  if (std::isfinite(ref.noise_floor_global))
-    meta.notes.push_back("the reference's own noise adds about " + fmt("%.3g", ref.noise_floor_global) +
-                         " to every global relMSE (its PT variance over its energy)");
+  meta.reference_floor = noise_floor_of(ref, frames);
+  if (std::isfinite(meta.reference_floor.global))
+    meta.notes.push_back("the reference's own noise adds about " + fmt("%.3g", meta.reference_floor.global) +
+                         " to every global relMSE, " + fmt("%.3g", meta.reference_floor.per_pixel) +
+                         " to every per-pixel relMSE" +
+                         (std::isfinite(meta.reference_floor.flicker)
+                              ? ", " + fmt("%.3g", meta.reference_floor.flicker) + " to every flicker"
+                              : std::string()) +
+                         " (from its variance of the mean)");
 
   const int display_frame = frames[frames.size() / 2];
   Denoising denoising;

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "core/io/atomic_file.h"
+#include "core/report/denoiser_comparison.h"
 #include "core/image/error_metrics.h"
 
 namespace gdvr {
@@ -85,7 +86,10 @@ std::string results_json(const ReportMeta& meta, const std::vector<ReportRow>& r
   j["height"] = meta.height;
   j["reference"] = {{"source", meta.reference_source}, {"path", meta.reference_path},
                     {"spp", meta.reference_spp}, {"render_seconds", meta.reference_seconds},
-                    {"cached", meta.reference_cached}};
+                    {"cached", meta.reference_cached},
+                    {"noise_floor", {{"rel_mse_global", json_number(meta.reference_floor.global)},
+                                     {"rel_mse_per_pixel", json_number(meta.reference_floor.per_pixel)},
+                                     {"flicker", json_number(meta.reference_floor.flicker)}}}};
   j["machine"] = {{"threads", meta.threads}, {"loadavg", meta.load}};
   j["notes"] = meta.notes;
   j["rows"] = nlohmann::json::array();
@@ -121,6 +125,23 @@ std::string results_json(const ReportMeta& meta, const std::vector<ReportRow>& r
         {"left_out", r.left_out},
     };
     j["rows"].push_back(std::move(row));
+  }
+  j["denoiser_comparison"] = nlohmann::json::array();
+  for (const DenoiserComparison& c : compare_with_denoisers(rows, meta.reference_floor)) {
+    nlohmann::json cj = {{"method", c.method},
+                         {"budget_s", c.budget_s},
+                         {"baseline", c.baseline},
+                         {"seconds_ratio", json_number(c.seconds_ratio)},
+                         {"ratio_per_pixel", json_number(c.ratio_per_pixel)},
+                         {"ratio_flicker", json_number(c.ratio_flicker)},
+                         {"ratio_global", json_number(c.ratio_global)},
+                         {"meets_per_pixel", c.meets_per_pixel},
+                         {"meets_flicker", c.meets_flicker},
+                         {"meets_global", c.meets_global},
+                         {"equal_time", c.equal_time},
+                         {"floor_well_below", c.floor_well_below},
+                         {"meets_all", c.meets_all()}};
+    j["denoiser_comparison"].push_back(std::move(cj));
   }
   return j.dump(2) + "\n";
 }

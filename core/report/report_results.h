@@ -54,6 +54,14 @@ struct ReportRow {
   std::map<std::string, int> left_out;  // FrameStats.left_out entries -> how many frames
 };
 
+// The figures the reference's own noise alone would give (core/report/reference_noise.h);
+// kNoValue where unknown (a supplied reference without a variance layer).
+struct ReferenceNoiseFloor {
+  double global = kNoValue;
+  double per_pixel = kNoValue;
+  double flicker = kNoValue;
+};
+
 struct ReportMeta {
   std::string input;
   std::string frames;
@@ -63,6 +71,7 @@ struct ReportMeta {
   int reference_spp = 0;         // 0 when supplied and unknown
   double reference_seconds = 0;  // time to render it (0 when cached or supplied)
   bool reference_cached = false;
+  ReferenceNoiseFloor reference_floor;
   int threads = 0;
   std::string load;  // /proc/loadavg at the start
   std::vector<std::string> notes;
