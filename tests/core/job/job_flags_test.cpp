@@ -17,10 +17,19 @@ namespace {
 namespace fs = std::filesystem;
 
 // A job file of the demo scene naming `sampling` (e.g. "spp": 16), in a
-// temporary folder.
+// temporary folder, removed at the end of the test binary.
 std::string job_file(const std::string& name, const std::string& sampling) {
+  struct Cleanup {
+    std::vector<fs::path> dirs;
+    ~Cleanup() {
+      std::error_code ignored;
+      for (const fs::path& d : dirs) fs::remove_all(d, ignored);
+    }
+  };
+  static Cleanup cleanup;
   const fs::path dir = fs::temp_directory_path() / ("gdvr_job_flags_" + name);
   fs::create_directories(dir);
+  cleanup.dirs.push_back(dir);
   const fs::path path = dir / "job.json";
   const std::string scene = (fs::path(GDVR_SOURCE_DIR) / "scenes/demo/cbox_demo.xml").string();
   std::ofstream(path) << R"({"scene": ")" << scene << R"(", "frames": "0-1", "width": 8, "height": 8, )" << sampling
