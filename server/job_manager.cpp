@@ -495,6 +495,11 @@ void JobManager::run(Job* job) {
     st = outputs->add_to_video(out.frame);
     if (!st.ok()) return fail_run(st.with_context("frame " + std::to_string(out.frame) + ": "));
   };
+  // Under a time budget, T-GPT's output waits for its window: the budget
+  // reserves what writing a frame costs, timed on the first rendered one.
+  cb.estimate_frame_final_seconds = [&](const FrameBuffers& buffers) {
+    return outputs ? outputs->estimate_write_seconds(buffers.layers) : 0.0;
+  };
   auto last_progress_notify = std::chrono::steady_clock::time_point{};
   cb.on_progress = [&](const JobProgress& p) {
     {

@@ -115,6 +115,12 @@ int main(int argc, char** argv) {
                  s.rays_per_second * 1e-6, (fs::path(out_dir) / w->file).string().c_str());
   };
 
+  // Under a time budget the EXRs count too: when a frame's output waits for
+  // later frames (T-GPT's window), the budget reserves what writing one costs,
+  // timed on a rendered frame's buffers (about as many layers as the output).
+  callbacks.estimate_frame_final_seconds = [&](const FrameBuffers& buffers) {
+    return outputs.value()->estimate_write_seconds(buffers.layers);
+  };
   Status st = run_job(job, options, callbacks, &g_cancel);
   if (st.ok() && write_status.ok()) {
     auto video = outputs.value()->finish();

@@ -81,6 +81,10 @@ void to_proto(const FrameStats& s, v1::FrameStats* out) {
   out->set_rel_mse(s.rel_mse);
   out->set_rel_mse_global(s.rel_mse_global);
   out->set_shift_failure_rate(s.shift_failure_rate);
+  out->set_pass_a_spp(s.pass_a_spp);
+  out->set_pass_b_spp(s.pass_b_spp);
+  out->set_sampling_seconds(s.sampling_seconds);
+  out->set_stage1_seconds(s.stage1_seconds);
 }
 
 FrameStats from_proto(const v1::FrameStats& s) {
@@ -98,6 +102,10 @@ FrameStats from_proto(const v1::FrameStats& s) {
   out.rel_mse = s.rel_mse();
   out.rel_mse_global = s.rel_mse_global();
   out.shift_failure_rate = s.shift_failure_rate();
+  out.pass_a_spp = s.pass_a_spp();
+  out.pass_b_spp = s.pass_b_spp();
+  out.sampling_seconds = s.sampling_seconds();
+  out.stage1_seconds = s.stage1_seconds();
   return out;
 }
 

@@ -31,6 +31,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   rays += direct->rays;
   invalid += direct->invalid_samples;
   const bool timed = settings.time_budget_s > 0;
+  const double sampling_start = elapsed();
   while (true) {
     const int first = spp_done, count = settings.spp;
     const double pass_start = elapsed();
@@ -62,6 +63,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
     const double last_pass_seconds = elapsed() - pass_start;
     if (!timed || elapsed() + last_pass_seconds > settings.time_budget_s) break;
   }
+  const double sampling_seconds = elapsed() - sampling_start;
 
   GptFrameResult result;
   result.buffers = film.resolve(spp_done);
@@ -79,6 +81,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
   result.invalid_samples = invalid;
   result.shift_failure_rate = shifts > 0 ? double(failures) / double(shifts) : 0.0;
   result.seconds = elapsed();
+  result.sampling_seconds = sampling_seconds;
   return result;
 }
 

@@ -19,6 +19,7 @@ struct GptFrameResult {
   double shift_failure_rate = 0; // over all attempted offsets
   uint64_t temporal_rays = 0;    // rays of the temporal shifts (part of `rays`)
   double seconds = 0;
+  double sampling_seconds = 0;   // of which the sampling passes (not the direct-light pass, not the resolve)
 };
 
 // `temporal`, when given, also shifts every base path into that frame

@@ -13,12 +13,27 @@ namespace gdvr {
 struct FrameStats {
   int frame = 0;
   double render_seconds = 0;
+  // Of render_seconds, the sampling passes: what a time budget scales (the
+  // direct-light pass, motion vectors and resolves are fixed costs).
+  double sampling_seconds = 0;
+  // The frame's stage 2: its reconstruction (G-PT), or the window solves
+  // finalizing it ran (T-GPT: a window is solved while finalizing the first
+  // frame that needs it, so the shot's solves add up over its frames).
   double reconstruct_seconds = 0;
   // The feature buffers (albedo, N, Z; core/render/feature_buffers.h): a fixed
-  // cost on top of render_seconds, outside the time budget; 0 when the job's
+  // cost beside render_seconds, inside the time budget; 0 when the job's
   // outputs.exr_layers selects none of them (they are not rendered then).
   double feature_seconds = 0;
+  // Stage 1 on the job runner's clock: render_seconds + feature_seconds + the
+  // runner's own work for the frame (moving the scene). With
+  // reconstruct_seconds and what the caller does with the final frame, the
+  // frame's share of a time budget (core/job/frame_time_budget.h).
+  double stage1_seconds = 0;
   int spp = 0;
+  // T-GPT: the samples per pixel of pass A and pass B (spp is their sum).
+  // Pass A of frame t+1 has the count of pass B of frame t (they replay the
+  // same random numbers), with or without a time budget; 0 for pt and gpt.
+  int pass_a_spp = 0, pass_b_spp = 0;
   uint64_t samples = 0;        // camera samples
   uint64_t rays = 0;           // every ray traced (closest hit and shadow)
   // Rays whose results enter a non-zero temporal gradient (tgpt): motion

@@ -103,8 +103,14 @@ Expected<JobSpec> job_from_flags(const JobFlags& flags, std::string* base_dir) {
   if (flags.frames) job.frames = *flags.frames;
   if (flags.width) job.width = *flags.width;
   if (flags.height) job.height = *flags.height;
-  if (flags.spp) job.spp = *flags.spp;
-  if (flags.time_budget_s) job.time_budget_s = *flags.time_budget_s;
+  // The command line's sampling replaces the job file's: --time-budget alone
+  // renders to the budget whatever spp the file names, --spp alone renders
+  // that many samples whatever budget the file names, and both together make
+  // --spp the budget's pass size (docs/service.md, "Samples and time budgets").
+  if (flags.spp || flags.time_budget_s) {
+    job.spp = flags.spp.value_or(0);
+    job.time_budget_s = flags.time_budget_s.value_or(0);
+  }
   if (flags.seed) job.seed = *flags.seed;
   if (flags.integrator) {
     auto integrator = parse_integrator(*flags.integrator);

@@ -29,7 +29,11 @@ struct JobFlags {
 
   // ---- Overrides of the job file's fields ----
   std::optional<std::string> frames;
-  std::optional<int> width, height, spp;
+  std::optional<int> width, height;
+  // Sampling: either flag replaces both of the job file's spp and
+  // time_budget_s (--time-budget alone: to the budget in the job's pass size
+  // of 1 spp; both: passes of --spp).
+  std::optional<int> spp;
   std::optional<double> time_budget_s;
   std::optional<uint64_t> seed;
   // Checked with the job, as the job file's field is: an unknown integrator

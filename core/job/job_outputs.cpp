@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -63,7 +64,11 @@ nlohmann::ordered_json frame_json(const WrittenFrame& r) {
           {"render_seconds", s.render_seconds},
           {"reconstruct_seconds", s.reconstruct_seconds},
           {"feature_seconds", s.feature_seconds},
+          {"sampling_seconds", s.sampling_seconds},
+          {"stage1_seconds", s.stage1_seconds},
           {"spp", s.spp},
+          {"pass_a_spp", s.pass_a_spp},
+          {"pass_b_spp", s.pass_b_spp},
           {"samples", s.samples},
           {"rays", s.rays},
           {"temporal_rays", s.temporal_rays},
@@ -91,7 +96,11 @@ Expected<WrittenFrame> parse_frame_entry(const std::string& json_text) {
     s.render_seconds = j.value("render_seconds", 0.0);
     s.reconstruct_seconds = j.value("reconstruct_seconds", 0.0);
     s.feature_seconds = j.value("feature_seconds", 0.0);
+    s.sampling_seconds = j.value("sampling_seconds", 0.0);
+    s.stage1_seconds = j.value("stage1_seconds", 0.0);
     s.spp = j.value("spp", 0);
+    s.pass_a_spp = j.value("pass_a_spp", 0);
+    s.pass_b_spp = j.value("pass_b_spp", 0);
     s.samples = j.value("samples", uint64_t(0));
     s.rays = j.value("rays", uint64_t(0));
     s.temporal_rays = j.value("temporal_rays", uint64_t(0));
@@ -234,6 +243,15 @@ Status JobOutputs::validate(const JobSpec& job, const Options& options, int firs
     if (!main_rgb(*img)) return invalid_argument("reference: '" + ref + "' has no RGB layer");
   }
   return Status::Ok();
+}
+
+double JobOutputs::estimate_write_seconds(const LayeredImage& layers) const {
+  const std::string probe = temporary_path_for(dir_ + "/time_budget_probe.exr");
+  const auto start = std::chrono::steady_clock::now();
+  const Status written = write_exr(probe, layers);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  discard_temporary(probe);
+  return written.ok() ? seconds : 0.0;
 }
 
 Expected<std::unique_ptr<JobOutputs>> JobOutputs::open(const JobSpec& job, std::vector<int> frames, std::string dir,

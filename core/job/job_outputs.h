@@ -104,6 +104,12 @@ class JobOutputs {
   // At completion: encodes what is still missing and moves the video into
   // place. Returns its file name ("" without video).
   Expected<std::string> finish();
+  // For a time budget, before any frame is final (JobCallbacks::
+  // estimate_frame_final_seconds): about what write_frame will take for a
+  // frame of these layers, timed by writing them as an EXR to a temporary file
+  // in the folder (removed again; a stale one is a temporary as any other).
+  // Previews, relMSE and video are not in it. 0 if it cannot be written.
+  double estimate_write_seconds(const LayeredImage& layers) const;
 
   int64_t video_frames() const;
 

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <set>
 
+#include "core/job/frame_time_budget.h"
 #include "core/job/integrators/integrator_runner.h"
 #include "core/job/job_validation.h"
 #include "core/render/feature_buffers.h"
@@ -114,9 +115,10 @@ Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& optio
 class JobRenderer {
  public:
   static Expected<std::unique_ptr<JobRenderer>> create(const JobSpec& job, const JobRunOptions& options) {
+    const auto start = std::chrono::steady_clock::now();
     auto prepared = prepare_job(job, options);
     if (!prepared.ok()) return prepared.status();
-    std::unique_ptr<JobRenderer> r(new JobRenderer(job, std::move(prepared.value())));
+    std::unique_ptr<JobRenderer> r(new JobRenderer(job, std::move(prepared.value()), start));
     Scene& desc = r->frame_desc_;
     desc = r->pj_.scene;
     if (!r->pj_.animation.empty())
@@ -130,7 +132,26 @@ class JobRenderer {
   const std::vector<int>& frames() const { return pj_.frames; }
   IntegratorRunner& runner() { return *pj_.runner; }
 
+  // The job's time budget over `frames` frames (none without time_budget_s).
+  // `caller_prior_s`: what the caller is expected to spend per final frame
+  // until one is measured; `includes_finalize` false: this process only
+  // renders (a farm task), so stage 2 and the output are not its cost.
+  void start_budget(int frames, double caller_prior_s, bool includes_finalize) {
+    if (job_.time_budget_s <= 0) return;
+    if (!includes_finalize) {
+      budget_ = std::make_unique<FrameTimeBudget>(FrameTimeBudget::stage1_only(job_.time_budget_s, frames));
+      return;
+    }
+    const double stage2 = pj_.runner->finalize_seconds_prior(pj_.render, int(pj_.frames.size()));
+    budget_ = std::make_unique<FrameTimeBudget>(job_.time_budget_s, frames, stage2, caller_prior_s);
+  }
+  FrameTimeBudget* budget() { return budget_.get(); }
+  // Seconds since the job began (scene loading included: the user waits for it).
+  double clock() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
   Expected<FrameBuffers> render(int frame, const FrameRenderControl& control) {
+    const double frame_start = clock();
+    if (budget_) budget_->begin_frame(frame_start);
     if (!pj_.animation.empty()) {
       GDVR_RETURN_IF_ERROR(apply_animation(pj_.animation, frame / job_.fps, &frame_desc_));
       GDVR_RETURN_IF_ERROR(scene_->update(frame_desc_));
@@ -139,29 +160,39 @@ class JobRenderer {
     out.frame = frame;
     FrameStats& st = out.stats;
     st.frame = frame;
+    // The feature pass first: a fixed cost the budget then takes off the
+    // frame before the integrator's allowance is set.
+    LayeredImage features;
+    GDVR_RETURN_IF_ERROR(render_features(control, &features, &st));
+    if (budget_) budget_->plan_frame(clock());
     // Another frame's description: this frame's with the animation at that time.
     auto describe_frame = [this](int other, Scene* desc) -> Status {
       *desc = frame_desc_;
       if (!pj_.animation.empty()) GDVR_RETURN_IF_ERROR(apply_animation(pj_.animation, other / job_.fps, desc));
       return Status::Ok();
     };
-    const FrameRenderContext context{*scene_, frame_desc_, pj_.render, pj_.animated_shapes, describe_frame, control};
+    const FrameRenderContext context{*scene_, frame_desc_, pj_.render, pj_.animated_shapes,
+                                     describe_frame, control, budget_.get()};
     GDVR_RETURN_IF_ERROR(pj_.runner->render(context, frame, &out));
-    GDVR_RETURN_IF_ERROR(render_features(control, &out));
+    for (ImageLayer& l : features.layers) out.layers.layers.push_back(std::move(l));
     st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);
     st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;
     st.rays_per_second = st.render_seconds > 0 ? double(st.rays) / st.render_seconds : 0;
     if (!scene_->has_environment()) st.left_out.push_back("environment lookups: the scene has no environment");
     st.left_out.insert(st.left_out.end(), pj_.scene_notes.begin(), pj_.scene_notes.end());
+    const double frame_end = clock();
+    st.stage1_seconds = frame_end - frame_start;
+    if (budget_) budget_->end_frame(frame_end);
     return out;
   }
 
  private:
-  JobRenderer(const JobSpec& job, PreparedJob pj) : job_(job), pj_(std::move(pj)) {}
+  JobRenderer(const JobSpec& job, PreparedJob pj, std::chrono::steady_clock::time_point start)
+      : job_(job), pj_(std::move(pj)), start_(start) {}
 
-  // The frame's feature buffers (albedo, N, Z) beside the integrator's
-  // layers, unless the job's EXR layer selection leaves them all out.
-  Status render_features(const FrameRenderControl& control, FrameBuffers* out) {
+  // The frame's feature buffers (albedo, N, Z) into `layers`, unless the
+  // job's EXR layer selection leaves them all out.
+  Status render_features(const FrameRenderControl& control, LayeredImage* layers, FrameStats* stats) {
     const std::vector<std::string>& selected = job_.outputs.exr_layers;
     const bool wanted = selected.empty() || std::any_of(selected.begin(), selected.end(), [](const std::string& l) {
                           const auto& names = feature_layer_names();
@@ -171,15 +202,17 @@ class JobRenderer {
     auto features =
         render_feature_buffers(*scene_, pj_.render, feature_buffer_settings_for(pj_.render.spp), control.cancel);
     if (!features.ok()) return features.status();
-    out->stats.feature_seconds = features->seconds;
-    add_feature_layers(std::move(features.value()), &out->layers);
+    stats->feature_seconds = features->seconds;
+    add_feature_layers(std::move(features.value()), layers);
     return Status::Ok();
   }
 
   const JobSpec& job_;
   PreparedJob pj_;
+  std::chrono::steady_clock::time_point start_;
   Scene frame_desc_;
   std::unique_ptr<FrameScene> scene_;
+  std::unique_ptr<FrameTimeBudget> budget_;
 };
 
 // Progress over a list of frames: fraction of the whole job and an ETA from the
@@ -292,6 +325,8 @@ Status render_job_buffers(const JobSpec& job, const JobRunOptions& options, cons
   for (int f : frames)
     if (!valid.count(f)) return invalid_argument("frame " + std::to_string(f) + " is not in the job's frame range");
   ProgressTracker progress(int(frames.size()), 0, int(frames.size()), on_progress);
+  // A farm task renders only: its budget is stage 1's (the finalize task runs elsewhere).
+  renderer.value()->start_budget(int(frames.size()), 0, /* includes_finalize = */ false);
   for (int frame : frames) {
     if (cancel && cancel->load()) return cancelled("job cancelled");
     FrameRenderControl control;
@@ -327,6 +362,10 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
   const int already_done = int(job_frames.size() - todo.size());
   ProgressTracker progress(already_done + render_count, already_done, render_count, callbacks.on_progress);
 
+  // A time budget pays for everything from here to the last final frame.
+  renderer.value()->start_budget(render_count, options.caller_seconds_per_frame, /* includes_finalize = */ true);
+  FrameTimeBudget* budget = renderer.value()->budget();
+  bool caller_probed = false;
   // Streaming: after each rendered frame, finalize (in order) every frame whose
   // buffers are all in, then drop the buffers no later frame reads; what is
   // held is bounded by the reconstruction window (1 frame for pt and gpt).
@@ -341,11 +380,23 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
     buffers[frame] = std::move(rendered.value());
     schedule.rendered(frame);
     progress.frame_done();
+    // Stage 2 and the caller's work on each final frame: on the budget too.
+    const double finalize_start = renderer.value()->clock();
+    int finalized = 0;
     for (int f = schedule.ready(); f >= 0; f = schedule.ready()) {
       auto out = runner.finalize(f, buffers);
       if (!out.ok()) return out.status();
       if (callbacks.on_frame_final) callbacks.on_frame_final(out.value());
       schedule.finalized();
+      ++finalized;
+    }
+    if (budget) budget->record_finalize(finalized, renderer.value()->clock() - finalize_start);
+    // A frame that cannot come out yet (T-GPT waits for its window): the
+    // caller's work per final frame is unknown until the first does, so it
+    // estimates it on these buffers, once.
+    if (budget && !caller_probed && finalized == 0 && callbacks.estimate_frame_final_seconds) {
+      caller_probed = true;
+      budget->set_caller_prior(callbacks.estimate_frame_final_seconds(buffers.at(frame)));
     }
     const int next_out = schedule.done() ? INT_MAX : todo[size_t(schedule.next_index())];
     for (int f : schedule.releasable([&](int held) { return runner.buffers_needed(held, next_out); }))

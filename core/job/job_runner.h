@@ -30,11 +30,22 @@ struct JobRunOptions {
   std::string base_dir;          // relative scene paths resolve here
   std::string asset_root;        // when set, scene files must lie inside it
   std::vector<int> skip_frames;  // already final (resume): not rendered again
+  // Seconds the caller spends on each final frame beyond writing it (the
+  // report's denoiser), which a time budget must pay for as well: run_job
+  // measures what on_frame_final takes, and this is its guess until then.
+  double caller_seconds_per_frame = 0;
 };
 
 struct JobCallbacks {
   std::function<void(const FrameOutput&)> on_frame_final;  // in frame order
   std::function<void(const JobProgress&)> on_progress;
+  // Optional, for a time budget: the seconds on_frame_final will take per
+  // frame, estimated on a rendered frame's buffers (gdvr-render times writing
+  // them). Called once, when the first frame rendered cannot be finalized at
+  // once (T-GPT waits for its window), so that the output of a window's frames
+  // is reserved from the frames before it; where frames come out at once,
+  // their output is measured instead.
+  std::function<double(const FrameBuffers&)> estimate_frame_final_seconds;
 };
 
 // Returns kCancelled if *cancel became true (checked once per tile).

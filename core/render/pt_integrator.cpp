@@ -74,6 +74,7 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
   // Passes: one pass of `spp` samples in spp mode; in time-budget mode passes
   // of `spp` samples each until the next pass would overrun the budget.
   const bool timed = settings.time_budget_s > 0;
+  const double sampling_start = elapsed();
   double last_pass_seconds = 0;
   while (true) {
     const int first = spp_done, count = settings.spp;
@@ -101,6 +102,7 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
     last_pass_seconds = elapsed() - pass_start;
     if (!timed || elapsed() + last_pass_seconds > settings.time_budget_s) break;
   }
+  const double sampling_seconds = elapsed() - sampling_start;
 
   FrameRenderResult result;
   result.color = Image(w, h, 3);
@@ -135,6 +137,7 @@ Expected<FrameRenderResult> render_frame_pt(const FrameScene& scene, const Frame
   result.rays = rays;
   result.invalid_samples = invalid;
   result.seconds = elapsed();
+  result.sampling_seconds = sampling_seconds;
   return result;
 }
 

@@ -18,7 +18,11 @@ namespace gdvr {
 struct FrameRenderSettings {
   int width = 0, height = 0;
   int spp = 4;
-  double time_budget_s = 0;    // > 0: render passes until the budget is spent (spp is then the pass size)
+  // > 0: render passes of `spp` until about this many seconds are spent (the
+  // direct-light pass included). A job's time budget sets it only for the
+  // first frame, before a cost per sample is measured; later frames get a
+  // count (core/job/frame_time_budget.h).
+  double time_budget_s = 0;
   uint64_t seed = 0;
   int threads = 0;
   int tile_size = 16;
@@ -37,6 +41,7 @@ struct FrameRenderResult {
   uint64_t rays = 0;
   uint64_t invalid_samples = 0;
   double seconds = 0;
+  double sampling_seconds = 0;  // of which the sampling passes (not the direct-light pass, not the means)
 };
 
 struct FrameRenderControl {

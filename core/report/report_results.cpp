@@ -62,7 +62,7 @@ std::string results_csv(const std::vector<ReportRow>& rows) {
   o << "method,integrator,reconstruction,budget_s,frames,seconds_per_frame,render_seconds,reconstruct_seconds,spp,"
        "rel_mse_global,rel_mse_per_pixel,flicker,shift_failure_rate,temporal_failure_rate,non_finite,"
        "equal_time_ratio_global,equal_time_ratio_per_pixel,equal_time_ratio_interpolated,"
-       "predicted_improvement,achieved_improvement,denoise_seconds\n";
+       "predicted_improvement,achieved_improvement,denoise_seconds,feature_seconds,wall_seconds_per_frame\n";
   for (const ReportRow& r : rows) {
     o << csv_text(r.method) << ',' << csv_text(r.integrator) << ',' << csv_text(r.reconstruction) << ','
       << csv_number(r.budget_s) << ',' << r.frames << ',' << csv_number(r.seconds_per_frame) << ','
@@ -72,7 +72,8 @@ std::string results_csv(const std::vector<ReportRow>& rows) {
       << csv_number(r.non_finite) << ',' << csv_number(r.equal_time_ratio_global) << ','
       << csv_number(r.equal_time_ratio_per_pixel) << ',' << csv_number(r.equal_time_ratio_interpolated) << ','
       << csv_number(r.predicted_improvement) << ',' << csv_number(r.achieved_improvement) << ','
-      << csv_number(r.denoise_seconds) << '\n';
+      << csv_number(r.denoise_seconds) << ',' << csv_number(r.feature_seconds) << ','
+      << csv_number(r.wall_seconds_per_frame) << '\n';
   }
   return o.str();
 }
@@ -103,6 +104,9 @@ std::string results_json(const ReportMeta& meta, const std::vector<ReportRow>& r
         {"render_seconds", json_number(r.render_seconds)},
         {"reconstruct_seconds", json_number(r.reconstruct_seconds)},
         {"denoise_seconds", json_number(r.denoise_seconds)},
+        {"feature_seconds", json_number(r.feature_seconds)},
+        {"stage1_seconds", json_number(r.stage1_seconds)},
+        {"wall_seconds_per_frame", json_number(r.wall_seconds_per_frame)},
         {"spp", json_number(r.spp)},
         {"rel_mse_global", json_number(r.rel_mse_global)},
         {"rel_mse_per_pixel", json_number(r.rel_mse_per_pixel)},

@@ -20,12 +20,17 @@ struct ReportRow {
   std::string reconstruction;  // "" for pt, else the job's reconstruction.method
   double budget_s = 0;         // time_budget_s per frame given to the renderer
   int frames = 0;
-  double seconds_per_frame = 0;    // measured: render + reconstruction + denoising, mean over frames
+  // Measured, mean over frames: stage 1 (render, feature pass, moving the
+  // scene) + reconstruction + denoising, what the time budget pays for.
+  double seconds_per_frame = 0;
+  // The run's wall time over its frames: seconds_per_frame plus scene loading
+  // and the report's own measuring (relMSE of each frame).
+  double wall_seconds_per_frame = kNoValue;
   double render_seconds = 0;       // mean per frame
+  double feature_seconds = 0;      // mean per frame: the feature pass (denoised methods; 0 for the others)
+  double stage1_seconds = 0;       // mean per frame: render + features + moving the scene
   double reconstruct_seconds = 0;  // mean per frame
-  // Mean per frame: OIDN on the frame (denoised methods; their feature buffers
-  // count in render_seconds).
-  double denoise_seconds = 0;
+  double denoise_seconds = 0;      // mean per frame: OIDN on the frame (denoised methods)
   double spp = 0;                  // mean per frame
   double rel_mse_global = kNoValue;     // over all frames' pixels
   double rel_mse_per_pixel = kNoValue;  // mean over frames

@@ -32,7 +32,7 @@ class TemporalTarget {
 Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const FrameRenderSettings& render,
                                             const TgptSettings& settings, TgptPassStreams streams,
                                             const TgptNeighbourhood& nb, const GradientFilmBuffers* reuse_a,
-                                            const FrameRenderControl& control) {
+                                            const FrameRenderControl& control, const TgptPassSizes& sizes) {
   GDVR_RETURN_IF_ERROR(settings.validate());
   if (!nb.at_t) return invalid_argument("render_tgpt_frame: no scene description for the frame");
   if (reuse_a && (!nb.prev || nb.to_prev.any()))
@@ -46,14 +46,16 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
   if (!direct.ok()) return direct.status().with_context("direct light: ");
   out.rays += direct->rays;
   out.invalid_samples += direct->invalid_samples;
-  const double direct_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // The passes take the direct light from their own camera samples (free
   // there); the pass above replaces it.
   FrameRenderSettings half = render;
   half.direct = DirectEmissionSettings{0, 0};
   half.spp = tgpt_pass_spp(render.spp);
-  if (half.time_budget_s > 0) half.time_budget_s = std::max(1e-3, 0.5 * (render.time_budget_s - direct_seconds));
+  half.time_budget_s = 0;
+  FrameRenderSettings settings_a = half;
+  if (sizes.a_spp > 0) settings_a.spp = sizes.a_spp;
+  else if (sizes.a_seconds > 0) settings_a.time_budget_s = sizes.a_seconds;
 
   // ---- Path-space temporal shift (reconnect): pass A's base paths go to the
   // previous frame, pass B's to the next, where the pair changes ----
@@ -76,27 +78,35 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
     control_a.on_progress = [&](double f) { control.on_progress(0.5 * f); };
     control_b.on_progress = [&](double f) { control.on_progress(0.5 + 0.5 * f); };
   }
+  double a_seconds = 0;
   if (reuse_a) {
     out.a = *reuse_a;
     out.reused_pass_a = true;
+    out.a_spp = settings_a.spp;  // the caller's count for it (the previous pass B's)
   } else {
-    auto a = render_frame_gpt(scene, half, settings.gpt, streams.a, control_a, backward.target());
+    auto a = render_frame_gpt(scene, settings_a, settings.gpt, streams.a, control_a, backward.target());
     if (!a.ok()) return a.status().with_context("pass A: ");
     out.a = std::move(a->buffers);
     out.rays += a->rays;
     out.invalid_samples += a->invalid_samples;
-    out.spp += a->spp;
+    out.a_spp = a->spp;
+    a_seconds = a->sampling_seconds;
     if (nb.prev && nb.to_prev.any()) out.temporal_rays += reconnect ? a->temporal_rays : a->rays;
   }
   // ---- Pass B (stream s(t_next)): replayed by the next frame's pass A ----
-  auto b = render_frame_gpt(scene, half, settings.gpt, streams.b, control_b, forward.target());
+  FrameRenderSettings settings_b = half;
+  settings_b.spp = sizes.b_spp ? sizes.b_spp(out.reused_pass_a ? 0 : out.a_spp, a_seconds)
+                               : (sizes.a_spp > 0 || sizes.a_seconds > 0 ? out.a_spp : half.spp);
+  if (settings_b.spp <= 0) return invalid_argument("render_tgpt_frame: pass B's spp must be positive");
+  auto b = render_frame_gpt(scene, settings_b, settings.gpt, streams.b, control_b, forward.target());
   if (!b.ok()) return b.status().with_context("pass B: ");
   out.b = std::move(b->buffers);
   out.rays += b->rays;
   out.temporal_rays += b->temporal_rays;
   out.invalid_samples += b->invalid_samples;
-  out.spp += b->spp;
-  if (out.reused_pass_a) out.spp += b->spp;
+  out.b_spp = b->spp;
+  out.spp = out.a_spp + out.b_spp;
+  out.sampling_seconds = a_seconds + b->sampling_seconds;
 
   // ---- Motion vectors, only towards neighbours that differ ----
   if (nb.next && nb.to_next.any()) {

@@ -11,7 +11,8 @@ The video is compared by its frame count only: the H.264
 encoder's bitstream may depend on thread timing."""
 import argparse, filecmp, json, os, shutil, signal, subprocess, sys, tempfile, time
 
-TIMING = {"render_seconds", "reconstruct_seconds", "feature_seconds", "samples_per_second", "rays_per_second"}
+TIMING = {"render_seconds", "reconstruct_seconds", "feature_seconds", "sampling_seconds", "stage1_seconds",
+          "samples_per_second", "rays_per_second"}
 
 
 def fail(msg):

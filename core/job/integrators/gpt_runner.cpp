@@ -1,6 +1,7 @@
 #include "core/job/integrators/gpt_runner.h"
 
 #include "core/gradient/gpt_integrator.h"
+#include "core/job/integrators/budgeted_sampling.h"
 #include "core/job/integrators/gradient_domain_frame.h"
 #include "core/recon/reconstruct.h"
 
@@ -14,9 +15,11 @@ Expected<std::unique_ptr<GptRunner>> GptRunner::create(const JobSpec& job) {
 }
 
 Status GptRunner::render(const FrameRenderContext& context, int frame, FrameBuffers* out) {
-  auto result = render_frame_gpt(context.scene, context.settings, settings_, uint32_t(frame), context.control);
+  auto result =
+      render_frame_gpt(context.scene, budgeted_render_settings(context), settings_, uint32_t(frame), context.control);
   if (!result.ok()) return result.status();
   GptFrameResult& r = result.value();
+  record_budgeted_sampling(context, r.spp, r.sampling_seconds);
   GradientFilmBuffers& b = r.buffers;
   out->layers.add("primal", {"R", "G", "B"}, std::move(b.primal));
   out->layers.add("dx", {"R", "G", "B"}, std::move(b.dx));

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/job/frame_output.h"
+#include "core/job/frame_time_budget.h"
 #include "core/job/job_spec.h"
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
@@ -35,6 +36,9 @@ struct FrameRenderContext {
   // neighbours).
   std::function<Status(int frame, Scene* description)> describe_frame;
   const FrameRenderControl& control;
+  // The job's time budget (null: none): the frame's allowance, and where the
+  // integrator records what its sampling cost (core/job/frame_time_budget.h).
+  FrameTimeBudget* budget = nullptr;
 };
 
 class IntegratorRunner {
@@ -57,6 +61,11 @@ class IntegratorRunner {
   virtual bool buffers_needed(int frame, int next_out) const { return frame >= next_out; }
   // Reconstruction windows solved so far (0 for an integrator without them).
   virtual int windows_solved() const { return 0; }
+  // Stage 2's expected seconds per frame of a `frames`-frame job at these
+  // settings, before any frame was finalized: what a time budget reserves for
+  // it until measured (core/job/frame_time_budget.h). pt and gpt finalize
+  // each frame right after rendering it, so the budget measures theirs at once.
+  virtual double finalize_seconds_prior(const FrameRenderSettings& /*settings*/, int /*frames*/) const { return 0; }
 };
 
 // The job's integrator, its settings built from the job and checked (errors
@@ -68,6 +77,7 @@ Expected<std::unique_ptr<IntegratorRunner>> make_integrator_runner(const JobSpec
 template <typename FrameResult>
 void record_render_stats(const FrameResult& r, const char* dropped, FrameStats* stats) {
   stats->render_seconds = r.seconds;
+  stats->sampling_seconds = r.sampling_seconds;
   stats->spp = r.spp;
   stats->rays = r.rays;
   if (r.invalid_samples > 0) stats->left_out.push_back(std::to_string(r.invalid_samples) + " " + dropped);

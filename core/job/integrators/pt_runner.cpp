@@ -1,13 +1,15 @@
 #include "core/job/integrators/pt_runner.h"
 
+#include "core/job/integrators/budgeted_sampling.h"
 #include "core/render/vector_batch.h"
 
 namespace gdvr {
 
 Status PtRunner::render(const FrameRenderContext& context, int frame, FrameBuffers* out) {
-  auto result = render_frame_pt(context.scene, context.settings, uint32_t(frame), context.control);
+  auto result = render_frame_pt(context.scene, budgeted_render_settings(context), uint32_t(frame), context.control);
   if (!result.ok()) return result.status();
   FrameRenderResult& r = result.value();
+  record_budgeted_sampling(context, r.spp, r.sampling_seconds);
   out->layers.add("", {"R", "G", "B"}, std::move(r.color));
   out->layers.add("direct", {"R", "G", "B"}, std::move(r.direct));
   out->layers.add("variance", {"R", "G", "B"}, std::move(r.variance));

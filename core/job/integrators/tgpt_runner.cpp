@@ -1,6 +1,11 @@
 #include "core/job/integrators/tgpt_runner.h"
 
+#include <algorithm>
+#include <chrono>
+#include <memory>
+
 #include "core/job/integrators/gradient_domain_frame.h"
+#include "core/recon/reconstruct.h"
 #include "core/render/feature_buffers.h"
 #include "core/temporal/change_detection.h"
 #include "core/temporal/pass_schedule.h"
@@ -60,28 +65,115 @@ Status TgptRunner::render(const FrameRenderContext& context, int frame, FrameBuf
       nb.next_scene = scene_next_.get();
     }
   }
-  // Across a static pair, pass A of t replays pass B of t−1 in an identical
-  // scene: same numbers, same image; copy it when we rendered it (and no
-  // time budget made the pass sizes differ).
+  // Pass A of t replays pass B of t−1 (same stream): it takes B's count, so
+  // that dt = A_t − B_{t−1} is a correlated difference, when this process
+  // rendered frame t−1 just before. Across a static pair the scene is the
+  // same too, so the pass is the same image: copied, not rendered.
+  const bool follows_b = pos > 0 && last_b_frame_ == frames[size_t(pos) - 1];
   const GradientFilmBuffers* reuse = nullptr;
-  if (pos > 0 && last_b_frame_ == frames[size_t(pos) - 1] && !nb.to_prev.any() && context.settings.time_budget_s <= 0)
-    reuse = &last_b_;
+  if (follows_b && !nb.to_prev.any() && last_b_kept_) reuse = &last_b_;
+  TgptPassSizes sizes;
+  if (follows_b) sizes.a_spp = last_b_spp_;
+  double a_seconds = 0;
+  if (FrameTimeBudget* budget = context.budget) {
+    const int unit = tgpt_pass_spp(context.settings.spp);
+    // The first frame of a process: pass A pairs with nothing here, and
+    // runs against the clock to measure what a sample costs.
+    if (!follows_b) {
+      if (budget->has_sample_cost())
+        sizes.a_spp = budget->take_count(budget->samples_in(budget->sampling_seconds()) / 2, unit);
+      else
+        sizes.a_seconds = std::max(0.5 * budget->sampling_seconds(), 1e-6);
+    }
+    // Pass B: half the frame's samples, steady from frame to frame, whatever
+    // pass A took (a count that made up for A would swing: 3, 7, 3, 7, ...).
+    // When the next frame copies it (static pair), it is all the samples.
+    const double share = nb.next && !nb.to_next.any() ? 1.0 : 0.5;
+    const double allowance = budget->sampling_seconds();
+    sizes.b_spp = [budget, unit, share, allowance, &a_seconds](int a_spp, double seconds) {
+      budget->record_sampling(a_spp, seconds);
+      a_seconds = seconds;
+      return budget->take_count(budget->samples_in(allowance) * share, unit);
+    };
+  }
   auto result = render_tgpt_frame(context.scene, context.settings, settings_, tgpt_pass_streams(frames, size_t(pos)),
-                                  nb, reuse, context.control);
+                                  nb, reuse, context.control, sizes);
   if (!result.ok()) return result.status();
   TgptFrameRender& r = result.value();
-  last_b_frame_ = INT_MIN;
-  if (nb.next && !nb.to_next.any()) {
-    last_b_ = r.b;
-    last_b_frame_ = frame;
-  }
+  if (context.budget) context.budget->record_sampling(r.b_spp, r.sampling_seconds - a_seconds);
+  last_b_frame_ = frame;
+  last_b_spp_ = r.b_spp;
+  last_b_kept_ = nb.next && !nb.to_next.any();
+  if (last_b_kept_) last_b_ = r.b;
+  else last_b_ = GradientFilmBuffers{};
   FrameStats& st = out->stats;
   record_render_stats(r, "non-finite samples or gradients dropped", &st);
   st.temporal_rays = r.temporal_rays;
+  st.pass_a_spp = r.a_spp;
+  st.pass_b_spp = r.b_spp;
   note_unused_glossy_shift(context.scene.scene(), settings_.gpt, &st);
   for (std::string& s : r.left_out) st.left_out.push_back(std::move(s));
   out->layers = tgpt_frame_layers(std::move(r));
+  if (context.budget && context.budget->pays_stage2() && !solve_calibrated_)
+    calibrate_window_solve(out->layers, context.budget);
   return Status::Ok();
+}
+
+double TgptRunner::window_frames_per_frame() const {
+  const int n = int(windows_.frames().size());
+  if (n == 0) return 0;
+  double solved = 0;
+  for (const WindowRange& w : shot_windows(n, settings_.window, settings_.hop)) solved += w.end - w.start;
+  return solved / n;
+}
+
+namespace {
+
+// Stage 2 of a T-GPT frame (its share of the window solves, the temporal
+// gradients, the blend) over the spatial solve of one frame's own buffers,
+// per window frame: a window adds the temporal terms and couples its frames
+// (more iterations), and its data no longer fit in the cache as one frame's
+// do, so the ratio grows with the machine's load. Measured on the demo job at
+// 128×128, 12 frames, W = 20 (docs/benchmarks.md, "Time budgets"): L1 2.2 at
+// load 5 to 4.0 at load 10, L2 2.5 to 4.0; the values sit between, nearer the
+// loaded end, where an underestimate would cost the most.
+double window_over_spatial_cost(ReconMethod method) {
+  switch (method) {
+    case ReconMethod::kL1: return 3.5;
+    default: return 3.0;
+  }
+}
+
+// Before anything is measured (the first frame's plan only): seconds per
+// pixel and window frame of stage 2, same measurement, two cores.
+double prior_seconds_per_pixel_frame(ReconMethod method) {
+  switch (method) {
+    case ReconMethod::kNone: return 0;
+    case ReconMethod::kL1: return 1e-5;
+    default: return 8e-7;
+  }
+}
+
+}  // namespace
+
+double TgptRunner::finalize_seconds_prior(const FrameRenderSettings& settings, int /*frames*/) const {
+  return double(settings.width) * double(settings.height) * window_frames_per_frame() *
+         prior_seconds_per_pixel_frame(settings_.recon.method);
+}
+
+void TgptRunner::calibrate_window_solve(const LayeredImage& layers, FrameTimeBudget* budget) {
+  solve_calibrated_ = true;
+  const auto start = std::chrono::steady_clock::now();
+  auto frame = tgpt_gradient_frame(layers, nullptr);
+  if (!frame.ok()) return;  // the finalize will say what is wrong; the prior stays
+  GradientWindow window;
+  window.frames.push_back(std::make_shared<const GradientFrame>(std::move(frame.value())));
+  auto solved = reconstruct(window, settings_.recon);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  budget->record_one_off(seconds);
+  if (!solved.ok()) return;
+  const double per_frame = seconds * window_over_spatial_cost(settings_.recon.method) * window_frames_per_frame();
+  budget->set_stage2_prior(per_frame);
 }
 
 Expected<FrameOutput> TgptRunner::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {

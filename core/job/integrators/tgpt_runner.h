@@ -26,10 +26,17 @@ class TgptRunner final : public IntegratorRunner {
   Expected<FrameOutput> finalize(int frame, const std::map<int, FrameBuffers>& buffers) override;
   bool buffers_needed(int frame, int next_out) const override { return windows_.buffers_needed(frame, next_out); }
   int windows_solved() const override { return windows_.windows_solved(); }
+  double finalize_seconds_prior(const FrameRenderSettings& settings, int frames) const override;
 
  private:
   TgptRunner(TgptSettings settings, bool clamp_negative, std::vector<int> job_frames);
   Expected<FrameOutput> finalize_output(int frame, const std::map<int, FrameBuffers>& buffers);
+  // Window frames solved per frame of the shot: each frame lies in about
+  // W/H windows (2 at the default overlap), fewer near the shot's ends.
+  double window_frames_per_frame() const;
+  // Under a time budget: times a spatial solve of the first frame's buffers
+  // and tells the budget what the shot's window solves will cost per frame.
+  void calibrate_window_solve(const LayeredImage& layers, FrameTimeBudget* budget);
 
   const TgptSettings settings_;
   const bool clamp_negative_;
@@ -37,8 +44,14 @@ class TgptRunner final : public IntegratorRunner {
 
   // ---- Stage 1, across the frames of one process ----
   std::unique_ptr<FrameScene> scene_prev_, scene_next_;  // temporal_shift reconnect: the neighbours' scenes
-  GradientFilmBuffers last_b_;  // pass B of frame last_b_frame_, kept only across a static pair
+  // Pass B of the last frame rendered: its frame and count (pass A of the
+  // next frame takes that count), and its buffers where the pair towards the
+  // next frame is static (the next pass A is then a copy).
   int last_b_frame_ = INT_MIN;
+  int last_b_spp_ = 0;
+  bool last_b_kept_ = false;
+  GradientFilmBuffers last_b_;
+  bool solve_calibrated_ = false;
 };
 
 }  // namespace gdvr

@@ -166,6 +166,21 @@ TEST(JobOutputsTest, UnknownOrRepeatedLayersAreRejectedWithTheFieldNamed) {
   EXPECT_NE(st.message().find("listed twice"), std::string::npos) << st.message();
 }
 
+// A time budget's estimate of the output's cost writes a real EXR of the
+// layers, and leaves nothing in the job's folder.
+TEST(JobOutputsTest, WriteEstimateLeavesNothingBehind) {
+  const fs::path dir = fresh_dir("write_estimate");
+  JobSpec job = tiny_demo_job("pt");
+  auto outputs = JobOutputs::open(job, {0}, dir.string(), {});
+  ASSERT_TRUE(outputs.ok()) << outputs.status().to_string();
+  LayeredImage layers;
+  layers.add("primal", {"R", "G", "B"}, Image(16, 16, 3));
+  layers.add("Z", {"Z"}, Image(16, 16, 1));
+  EXPECT_GT(outputs.value()->estimate_write_seconds(layers), 0.0);
+  EXPECT_TRUE(fs::is_empty(dir)) << "the probe EXR must be removed";
+  fs::remove_all(dir);
+}
+
 TEST(JobOutputsTest, FrameEntryRoundTrips) {
   WrittenFrame w;
   w.file = "frame_0007.exr";
