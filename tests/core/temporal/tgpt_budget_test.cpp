@@ -90,7 +90,9 @@ TEST(TgptBudgetTest, PassAOfEveryFrameHasTheCountOfThePreviousPassB) {
     EXPECT_GE(s.pass_a_spp, 1);
     EXPECT_GE(s.pass_b_spp, 1);
     EXPECT_EQ(s.spp, s.pass_a_spp + s.pass_b_spp);
-    if (i > 0) EXPECT_EQ(s.pass_a_spp, out[i - 1].stats.pass_b_spp);
+    if (i > 0) {
+      EXPECT_EQ(s.pass_a_spp, out[i - 1].stats.pass_b_spp);
+    }
     EXPECT_GT(s.stage1_seconds, 0.0);
     EXPECT_LE(s.sampling_seconds, s.render_seconds);
   }
