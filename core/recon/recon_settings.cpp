@@ -6,6 +6,7 @@
 namespace gdvr {
 
 namespace {
+constexpr int kMinTileSize = 16;
 Status positive_finite(double v, const char* field) {
   if (!std::isfinite(v) || v <= 0)
     return invalid_argument(std::string("recon settings: ") + field + " must be finite and > 0, got " +
@@ -40,6 +41,12 @@ Status ReconSettings::validate() const {
   if (l1_epsilon_decay > 1) return invalid_argument("recon settings: l1_epsilon_decay must be <= 1");
   GDVR_RETURN_IF_ERROR(at_least(cv_iterations, 0, "cv_iterations"));
   GDVR_RETURN_IF_ERROR(positive_finite(variance_floor, "variance_floor"));
+  // Tiles smaller than their own halo spend most of their work on pixels
+  // they throw away; below 16 pixels a side it is a typo, not a choice.
+  if (tile_size != 0 && tile_size < kMinTileSize)
+    return invalid_argument("recon settings: tile_size must be 0 (no tiling) or >= " + std::to_string(kMinTileSize) +
+                            ", got " + std::to_string(tile_size));
+  GDVR_RETURN_IF_ERROR(at_least(tile_halo, 0, "tile_halo"));
   return Status::Ok();
 }
 
@@ -51,7 +58,7 @@ std::string ReconSettings::to_string() const {
     << " l1_outer_iterations=" << l1_outer_iterations << " l1_inner_iterations=" << l1_inner_iterations
     << " l1_inner_tolerance=" << l1_inner_tolerance << " l1_epsilon0=" << l1_epsilon0
     << " l1_epsilon_decay=" << l1_epsilon_decay << " cv_iterations=" << cv_iterations
-    << " variance_floor=" << variance_floor;
+    << " variance_floor=" << variance_floor << " tile_size=" << tile_size << " tile_halo=" << tile_halo;
   return s.str();
 }
 
