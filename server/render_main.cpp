@@ -29,7 +29,7 @@ int usage(const char* msg) {
       "usage: gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]\n"
       "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
       "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
-      "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--keep-negative]\n"
+      "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--tile-size N] [--keep-negative]\n"
       "       [--param NAME=VALUE ...]\n"
       "Flags override the job file; values are checked with the job (errors name the field).\n");
 }

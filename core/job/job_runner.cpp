@@ -281,6 +281,17 @@ Expected<FrameOutput> JobFinalizer::finalize(int frame, const std::map<int, Fram
 
 int JobFinalizer::windows_solved() const { return runner_->windows_solved(); }
 
+Expected<TileGrid> JobFinalizer::tile_grid(int width, int height) const { return runner_->tile_grid(width, height); }
+
+Expected<Image> JobFinalizer::reconstruct_tiles(int frame, const std::vector<int>& tiles,
+                                                const std::map<int, FrameBuffers>& buffers) {
+  return runner_->reconstruct_tiles(frame, tiles, buffers);
+}
+
+Expected<FrameOutput> JobFinalizer::finalize_solved(int frame, const std::map<int, FrameBuffers>& buffers, Image solved) {
+  return runner_->finalize_solved(frame, buffers, std::move(solved));
+}
+
 Status render_job_buffers(const JobSpec& job, const JobRunOptions& options, const std::vector<int>& frames,
                           const std::function<Status(FrameBuffers&&)>& on_buffers,
                           const std::function<void(const JobProgress&)>& on_progress,

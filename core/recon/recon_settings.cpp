@@ -6,7 +6,6 @@
 namespace gdvr {
 
 namespace {
-constexpr int kMinTileSize = 16;
 Status positive_finite(double v, const char* field) {
   if (!std::isfinite(v) || v <= 0)
     return invalid_argument(std::string("recon settings: ") + field + " must be finite and > 0, got " +
@@ -41,10 +40,8 @@ Status ReconSettings::validate() const {
   if (l1_epsilon_decay > 1) return invalid_argument("recon settings: l1_epsilon_decay must be <= 1");
   GDVR_RETURN_IF_ERROR(at_least(cv_iterations, 0, "cv_iterations"));
   GDVR_RETURN_IF_ERROR(positive_finite(variance_floor, "variance_floor"));
-  // Tiles smaller than their own halo spend most of their work on pixels
-  // they throw away; below 16 pixels a side it is a typo, not a choice.
-  if (tile_size != 0 && tile_size < kMinTileSize)
-    return invalid_argument("recon settings: tile_size must be 0 (no tiling) or >= " + std::to_string(kMinTileSize) +
+  if (tile_size != 0 && tile_size < kMinReconTileSize)
+    return invalid_argument("recon settings: tile_size must be 0 (no tiling) or >= " + std::to_string(kMinReconTileSize) +
                             ", got " + std::to_string(tile_size));
   GDVR_RETURN_IF_ERROR(at_least(tile_halo, 0, "tile_halo"));
   return Status::Ok();

@@ -38,9 +38,14 @@ inline constexpr double kDefaultReconAlpha = 0.2;
 // than this are solved in tiles of at most this many pixels a side. Chosen
 // from gdvr-bench-tgpt --recon (docs/benchmarks.md, "Stage 2 by tiles").
 inline constexpr int kDefaultReconTileSize = 512;
+// Smaller tiles spend most of their work on the halo they throw away; below
+// this a tile size is a typo, not a choice.
+inline constexpr int kMinReconTileSize = 16;
 // Overlap on each side of a tile's core: the measured impulse response of the
-// α = 0.2 operator has decayed below 1e-5 of its peak here (docs/benchmarks.md).
-inline constexpr int kDefaultReconTileHalo = 48;
+// α = 0.2 operator is 4e-5 of its peak here, and what the cut halo changes
+// in a core is ~80x smaller than what the default CG tolerance itself leaves
+// (docs/reconstruction.md, "Tiled solve").
+inline constexpr int kDefaultReconTileHalo = 32;
 
 struct ReconSettings {
   // The library's default for a caller that builds ReconSettings itself (the

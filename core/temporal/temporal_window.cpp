@@ -165,7 +165,7 @@ Status TemporalWindowCache::solve(size_t window_index, int requested, const Fram
   if (!grid.ok()) return grid.status();
   auto solved = solve_tiles(
       grid.value(), w.end - w.start, [&](const PixelRect& padded) { return gradient_window(w, reader, padded); },
-      solve_, sink);
+      solve_, sink, tile_subset_);
   if (!solved.ok()) return solved.status();
   for (int k : targets) {
     Blend& b = blends_[k];
@@ -217,6 +217,13 @@ Expected<Image> TemporalWindowCache::reconstruct(int frame, const FrameRegionRea
   // Its image is handed out; asked for again it is solved again.
   blends_.erase(index);
   return out;
+}
+
+void TemporalWindowCache::solve_only_tiles(std::vector<int> tiles) {
+  if (tiles == tile_subset_) return;
+  tile_subset_ = std::move(tiles);
+  blends_.clear();
+  solved_.clear();
 }
 
 bool TemporalWindowCache::buffers_needed(int frame, int next_out) const {

@@ -28,6 +28,7 @@
 #include "core/image/pixel_rect.h"
 #include "core/recon/gradient_window.h"
 #include "core/recon/recon_result.h"
+#include "core/recon/tiled_reconstruct.h"
 #include "core/temporal/tgpt_settings.h"
 
 namespace gdvr {
@@ -102,6 +103,14 @@ class TemporalWindowCache {
   // frames of buffers instead of W + H.
   bool buffers_needed(int frame, int next_out) const;
 
+  // Solve only these tiles of the tile grid (tiled_reconstruct.h; all when
+  // empty): a farm's tiled finalize, where each task solves some tiles and a
+  // last step pastes them together. Pixels outside their cores come out 0.
+  // Changing the subset forgets what was solved.
+  void solve_only_tiles(std::vector<int> tiles);
+  // The tile grid the windows are solved with, for frames of width × height.
+  Expected<TileGrid> tile_grid(int width, int height) const { return tile_grid_for(settings_.recon, width, height); }
+
   int windows_solved() const { return windows_solved_; }
   // Windows solved whose frames are not all out yet.
   int cached_windows() const { return int(solved_.size()); }
@@ -134,6 +143,7 @@ class TemporalWindowCache {
   std::map<int, Blend> blends_;  // by shot position, frames not out yet
   std::set<size_t> solved_;      // windows solved whose frames are not all out
   int released_end_ = 0;         // shot positions before it are out
+  std::vector<int> tile_subset_;  // empty: every tile
   int windows_solved_ = 0;
 };
 

@@ -10,7 +10,8 @@
 // --tile-size N also solves each case by tiles (core/recon/tiled_reconstruct.h)
 // and reports the time and the agreement with the whole-frame solve (max
 // |difference|, relMSE, the seam metric along tile borders); --diff-png
-// writes |tiled − whole| of the centre frame around a tile corner, ×1000.
+// writes |tiled − whole| of the centre frame around a tile corner, scaled
+// so that the largest difference is white.
 // --impulse prints the L2 operator's impulse response against distance, from
 // which the default halo is chosen (docs/reconstruction.md, "Tiled solve").
 #include <sys/resource.h>
@@ -30,6 +31,7 @@
 
 #include "core/image/error_metrics.h"
 #include "core/io/image_io.h"
+#include "core/recon/impulse_response.h"
 #include "core/recon/reconstruct.h"
 #include "core/recon/tile_seams.h"
 #include "core/recon/tiled_reconstruct.h"
@@ -48,6 +50,9 @@ struct Args {
   int tile_size = 0;
   std::string diff_png;
   ReconSettings settings;
+  bool variances() const {
+    return std::find(methods.begin(), methods.end(), ReconMethod::kWeighted) != methods.end();
+  }
 };
 
 double peak_rss_mib() {
@@ -64,11 +69,16 @@ float value(int x, int y, int t, int c) {
   return s + edge;
 }
 
-std::shared_ptr<const GradientFrame> make_frame(int W, int H, int t, bool temporal) {
+// `variances`: the noise's true variances too (the weighted control variates need them).
+std::shared_ptr<const GradientFrame> make_frame(int W, int H, int t, bool temporal, bool variances) {
   auto f = std::make_shared<GradientFrame>();
   for (Term term : kAllTerms) {
     if (is_temporal(term) && !temporal) continue;
     f->buffer(term) = Image(W, H, 3);
+    if (variances) {
+      f->variance(term) = Image(W, H, 3);
+      for (float& v : f->variance(term).data()) v = term == Term::kPrimal ? 0.01f : 0.0009f;
+    }
   }
   tbb::parallel_for(0, H, [&](int y) {
     std::mt19937 rng(unsigned(t * 100003 + y));
@@ -145,49 +155,34 @@ void compare_tiled(const char* label, const GradientWindow& w, const ReconSettin
               y0 = std::clamp(cy - 128, 0, std::max(0, w.height() - 256));
     const int t = w.size() / 2;
     Image diff(std::min(256, w.width()), std::min(256, w.height()), 3);
+    float largest = 0;
     for (int y = 0; y < diff.height(); ++y)
       for (int x = 0; x < diff.width(); ++x)
-        for (int c = 0; c < 3; ++c)
-          diff.at(x, y, c) = 1000.0f * std::fabs(tiled.frames[t].at(x0 + x, y0 + y, c) - whole.frames[t].at(x0 + x, y0 + y, c));
+        for (int c = 0; c < 3; ++c) {
+          diff.at(x, y, c) = std::fabs(tiled.frames[t].at(x0 + x, y0 + y, c) - whole.frames[t].at(x0 + x, y0 + y, c));
+          largest = std::max(largest, diff.at(x, y, c));
+        }
+    // Scaled so that the largest difference is white: a seam would be a line.
+    if (largest > 0)
+      for (float& v : diff.data()) v /= largest;
     if (Status st = write_png8(diff_png, diff); !st.ok()) std::fprintf(stderr, "%s\n", st.to_string().c_str());
-    else std::printf("wrote %s: |tiled - whole| x1000, frame %d, pixels [%d,%d)x[%d,%d)\n", diff_png.c_str(), t, x0,
-                     x0 + diff.width(), y0, y0 + diff.height());
+    else std::printf("wrote %s: |tiled - whole| / %.2e, frame %d, pixels [%d,%d)x[%d,%d)\n", diff_png.c_str(), largest, t,
+                     x0, x0 + diff.width(), y0, y0 + diff.height());
   }
 }
 
-// The L2 solve of a window whose primal is a unit impulse in the centre of
-// its middle frame, all gradients 0: a column of A⁻¹, how far one sample
-// reaches. Prints the largest |response| over all frames at each Chebyshev
-// distance from the impulse, relative to the peak.
+// The operator's impulse response against distance (core/recon/impulse_response.h).
 void impulse_response(const Args& a) {
-  const int size = 161, frames = a.frames;
-  GradientWindow w;
-  for (int t = 0; t < frames; ++t) {
-    auto f = std::make_shared<GradientFrame>();
-    for (Term term : kAllTerms) f->buffer(term) = Image(size, size, 1);
-    if (t == frames / 2) f->buffer(Term::kPrimal).at(size / 2, size / 2, 0) = 1.0f;
-    w.frames.push_back(std::move(f));
-  }
-  ReconSettings s = a.settings;
-  s.method = ReconMethod::kL2;
-  s.l2_tolerance = 1e-10;
-  s.l2_max_iterations = 20000;
-  auto r = reconstruct(w, s);
+  const int size = 161;
+  auto r = impulse_response_by_distance(a.settings, size, a.frames);
   if (!r.ok()) {
     std::fprintf(stderr, "%s\n", r.status().to_string().c_str());
     std::exit(1);
   }
-  std::vector<double> by_distance(size_t(size / 2 + 1), 0.0);
-  for (const Image& img : r->frames)
-    for (int y = 0; y < size; ++y)
-      for (int x = 0; x < size; ++x) {
-        const int d = std::max(std::abs(x - size / 2), std::abs(y - size / 2));
-        by_distance[size_t(d)] = std::max(by_distance[size_t(d)], double(std::fabs(img.at(x, y, 0))));
-      }
-  std::printf("impulse response, alpha %g, %d frames of %dx%d, all six terms (CG to %.0e, %d iterations): "
+  std::printf("impulse response, alpha %g, %d frames of %dx%d, all six terms (CG to 1e-10): "
               "max |x| at Chebyshev distance r / peak\n",
-              s.alpha, frames, size, size, s.l2_tolerance, r->stats.cg_iterations);
-  for (int d = 0; d <= size / 2; d += 4) std::printf("  r = %3d  %.3e\n", d, by_distance[size_t(d)] / by_distance[0]);
+              a.settings.alpha, a.frames, size, size);
+  for (int d = 0; d <= size / 2; d += 4) std::printf("  r = %3d  %.3e\n", d, r.value()[size_t(d)]);
 }
 
 void bench(const char* label, const GradientWindow& w, ReconSettings s, ReconMethod m, int runs,
@@ -291,12 +286,12 @@ int main(int argc, char** argv) {
 
   if (a.single) {
     GradientWindow w;
-    w.frames.push_back(make_frame(a.width, a.height, 0, false));
+    w.frames.push_back(make_frame(a.width, a.height, 0, false, a.variances()));
     for (ReconMethod m : a.methods) bench("single frame", w, a.settings, m, a.runs, 1, a);
   }
   if (a.window) {
     GradientWindow w;
-    for (int t = 0; t < a.frames; ++t) w.frames.push_back(make_frame(a.width, a.height, t, true));
+    for (int t = 0; t < a.frames; ++t) w.frames.push_back(make_frame(a.width, a.height, t, true, a.variances()));
     // The sliding window advances by its hop: each solve pays for hop frames.
     const int hop = window_hop(a.frames);
     char label[64];

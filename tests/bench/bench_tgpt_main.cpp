@@ -333,6 +333,8 @@ LayeredImage synthetic_frame(int w, int h, int t, int n) {
   return L;
 }
 
+constexpr int kOutputBandRows = 128;
+
 int recon(const Args& a) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
   TgptSettings s;
@@ -378,11 +380,18 @@ int recon(const Args& a) {
       const auto s0 = Clock::now();
       auto img = cache.reconstruct(r, buffers.reader(), nullptr);
       if (!img.ok()) return fail(img.status());
-      if (r + 1 < n) {  // the output's own dt layers, as finalize does
-        auto cur = buffers.whole(r), next = buffers.whole(r + 1);
-        if (!cur.ok() || !next.ok()) return fail(cur.ok() ? next.status() : cur.status());
-        auto tg = temporal_gradients(**cur, **next, s);
-        if (!tg.ok()) return fail(tg.status());
+      if (r + 1 < n) {
+        // The output's own dt layers, as finalize does, by bands of rows so
+        // that spilled frames are never read whole (the synthetic motion is
+        // 0, so the bands' masks are those of the whole frame).
+        const FrameRegionReader reader = buffers.reader();
+        for (int y0 = 0; y0 < a.height; y0 += kOutputBandRows) {
+          const PixelRect band{0, y0, a.width, std::min(a.height, y0 + kOutputBandRows)};
+          auto cur = reader.read(r, band), next = reader.read(r + 1, band);
+          if (!cur.ok() || !next.ok()) return fail(cur.ok() ? next.status() : cur.status());
+          auto tg = temporal_gradients(**cur, **next, s);
+          if (!tg.ok()) return fail(tg.status());
+        }
       }
       solve_seconds += seconds_since(s0);
       cache.release_through(r);

@@ -17,6 +17,7 @@
 
 #include "core/job/frame_output.h"
 #include "core/job/job_spec.h"
+#include "core/recon/tile_grid.h"
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
 #include "core/scene/scene.h"
@@ -57,6 +58,28 @@ class IntegratorRunner {
   virtual bool buffers_needed(int frame, int next_out) const { return frame >= next_out; }
   // Reconstruction windows solved so far (0 for an integrator without them).
   virtual int windows_solved() const { return 0; }
+
+  // ---- Stage 2 by tiles (a farm's tiled finalize, docs/farm.md) ----
+  // Only integrators with a window solve split it; the others refuse.
+  // The tile grid of the reconstruction for frames of width × height.
+  virtual Expected<TileGrid> tile_grid(int /*width*/, int /*height*/) const { return no_tiled_finalize(); }
+  // The reconstructed image of `frame` before the direct light, with only the
+  // cores of `tiles` solved (0 elsewhere); `buffers` as for finalize.
+  virtual Expected<Image> reconstruct_tiles(int /*frame*/, const std::vector<int>& /*tiles*/,
+                                            const std::map<int, FrameBuffers>& /*buffers*/) {
+    return no_tiled_finalize();
+  }
+  // finalize with the reconstructed image given (every tile's part pasted
+  // together); `buffers` need only hold the frame and the next one.
+  virtual Expected<FrameOutput> finalize_solved(int /*frame*/, const std::map<int, FrameBuffers>& /*buffers*/,
+                                                Image /*solved*/) {
+    return no_tiled_finalize();
+  }
+
+ protected:
+  static Status no_tiled_finalize() {
+    return unimplemented("this integrator's finalize does not split into tiles (only tgpt's does)");
+  }
 };
 
 // The job's integrator, its settings built from the job and checked (errors

@@ -85,14 +85,33 @@ Status TgptRunner::render(const FrameRenderContext& context, int frame, FrameBuf
 }
 
 Expected<FrameOutput> TgptRunner::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {
-  auto out = finalize_output(frame, buffers);
+  windows_.solve_only_tiles({});
+  auto out = finalize_output(frame, buffers, nullptr);
   // Frames come out in increasing order (a later one, out of order, solves
   // again what it needs): windows ending here are done with.
   if (out.ok()) windows_.release_through(frame);
   return out;
 }
 
-Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int, FrameBuffers>& buffers) {
+Expected<Image> TgptRunner::reconstruct_tiles(int frame, const std::vector<int>& tiles,
+                                              const std::map<int, FrameBuffers>& buffers) {
+  if (tiles.empty()) return invalid_argument("finalize: no tiles given");
+  windows_.solve_only_tiles(tiles);
+  auto solved = windows_.reconstruct(frame, [&](int f) -> const LayeredImage* {
+    auto it = buffers.find(f);
+    return it == buffers.end() ? nullptr : &it->second.layers;
+  }, nullptr);
+  if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+  windows_.release_through(frame);
+  return solved;
+}
+
+Expected<FrameOutput> TgptRunner::finalize_solved(int frame, const std::map<int, FrameBuffers>& buffers, Image solved) {
+  return finalize_output(frame, buffers, &solved);
+}
+
+Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int, FrameBuffers>& buffers,
+                                                  Image* solved_elsewhere) {
   const std::vector<int>& frames = windows_.frames();
   const int pos = windows_.position(frame);
   if (pos < 0) return invalid_argument("frame " + std::to_string(frame) + " is not in the job's frame range");
@@ -112,9 +131,20 @@ Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int,
   if (!direct) return invalid_argument("finalize: frame buffers lack the 'direct' layer");
 
   ReconStats recon_stats;
-  auto solved = windows_.reconstruct(frame, layers_of, &recon_stats);
-  if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
-  Image final_image = std::move(solved.value());
+  Image final_image;
+  if (solved_elsewhere) {
+    if (solved_elsewhere->width() != direct->image.width() || solved_elsewhere->height() != direct->image.height() ||
+        solved_elsewhere->channels() != direct->image.channels())
+      return invalid_argument("finalize: frame " + std::to_string(frame) + ": the solved image is " +
+                              std::to_string(solved_elsewhere->width()) + "x" + std::to_string(solved_elsewhere->height()) +
+                              ", its buffers are " + std::to_string(direct->image.width()) + "x" +
+                              std::to_string(direct->image.height()));
+    final_image = std::move(*solved_elsewhere);
+  } else {
+    auto solved = windows_.reconstruct(frame, layers_of, &recon_stats);
+    if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+    final_image = std::move(solved.value());
+  }
   const int64_t bad_direct = add_direct_clamped(direct->image, clamp_negative_, &final_image);
 
   FrameOutput out;
