@@ -3,7 +3,9 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <filesystem>
 #include <cstdint>
 #include <cstring>
 
@@ -82,6 +84,25 @@ Status write_layer_spill(const std::string& path, const LayeredImage& image) {
     return st;
   }
   return commit_temporary(tmp, path);
+}
+
+long long layer_pixel_bytes(const LayeredImage& image) {
+  long long n = 0;
+  for (const ImageLayer& layer : image.layers) n += (long long)layer.image.data().size() * (long long)sizeof(float);
+  return n;
+}
+
+Expected<std::unique_ptr<LayerSpillFile>> LayerSpillFile::spill(const std::string& dir, const LayeredImage& image) {
+  // A name unique in the process (and, with the pid, among processes sharing the folder).
+  static std::atomic<long long> counter{0};
+  const std::string path = (std::filesystem::path(dir.empty() ? std::filesystem::temp_directory_path().string() : dir) /
+                            ("gdvr_spill_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + ".raw"))
+                               .string();
+  GDVR_RETURN_IF_ERROR(write_layer_spill(path, image));
+  auto file = open(path);
+  std::error_code ec;
+  std::filesystem::remove(path, ec);  // the open descriptor keeps the pixels
+  return file;
 }
 
 Expected<std::unique_ptr<LayerSpillFile>> LayerSpillFile::open(const std::string& path) {

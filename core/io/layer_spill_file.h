@@ -22,10 +22,17 @@ namespace gdvr {
 // Writes every layer of `image` (all of one size) to `path`, replacing it.
 Status write_layer_spill(const std::string& path, const LayeredImage& image);
 
+// The bytes of `image`'s pixels (what spilling it frees).
+long long layer_pixel_bytes(const LayeredImage& image);
+
 class LayerSpillFile {
  public:
   // Reads and checks the header; the pixels stay on disk.
   static Expected<std::unique_ptr<LayerSpillFile>> open(const std::string& path);
+  // Writes `image` to a new file in `dir`, opens it and removes its name: the
+  // pixels live until the returned file is closed, and nothing is left
+  // behind whatever happens to the process.
+  static Expected<std::unique_ptr<LayerSpillFile>> spill(const std::string& dir, const LayeredImage& image);
   ~LayerSpillFile();
   LayerSpillFile(const LayerSpillFile&) = delete;
   LayerSpillFile& operator=(const LayerSpillFile&) = delete;

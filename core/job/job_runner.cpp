@@ -350,6 +350,19 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
     auto rendered = renderer.value()->render(frame, control);
     if (!rendered.ok()) return rendered.status().with_context("frame " + std::to_string(frame) + ": ");
     buffers[frame] = std::move(rendered.value());
+    if (options.memory_limit_bytes >= 0 && runner.reads_spilled_buffers()) {
+      // Over the limit, the frame just rendered goes to disk (finalize and
+      // the tiled window solve read it back a region at a time).
+      long long held = 0;
+      for (const auto& [f, fb] : buffers) held += layer_pixel_bytes(fb.layers);
+      if (held > options.memory_limit_bytes) {
+        FrameBuffers& fb = buffers[frame];
+        auto file = LayerSpillFile::spill(options.spill_dir, fb.layers);
+        if (!file.ok()) return file.status().with_context("frame " + std::to_string(frame) + ": --memory-limit: ");
+        fb.spilled = std::move(file.value());
+        fb.layers = LayeredImage();
+      }
+    }
     schedule.rendered(frame);
     progress.frame_done();
     for (int f = schedule.ready(); f >= 0; f = schedule.ready()) {

@@ -31,6 +31,13 @@ struct JobRunOptions {
   std::string base_dir;          // relative scene paths resolve here
   std::string asset_root;        // when set, scene files must lie inside it
   std::vector<int> skip_frames;  // already final (resume): not rendered again
+  // The buffered frames a streaming stage 2 holds (tgpt's windows) stay in
+  // memory up to this many bytes of pixels; beyond it a frame's buffers go to
+  // an unnamed file in spill_dir (empty: the system's temporary folder) and
+  // the window solve reads each tile's region from there (docs/tgpt.md,
+  // "Memory"). < 0: no limit. Integrators that hold no frames ignore it.
+  long long memory_limit_bytes = -1;
+  std::string spill_dir;
 };
 
 struct JobCallbacks {

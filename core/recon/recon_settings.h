@@ -37,7 +37,7 @@ inline constexpr double kDefaultReconAlpha = 0.2;
 // Tiled solve (docs/reconstruction.md, "Tiled solve"): frames wider or taller
 // than this are solved in tiles of at most this many pixels a side. Chosen
 // from gdvr-bench-tgpt --recon (docs/benchmarks.md, "Stage 2 by tiles").
-inline constexpr int kDefaultReconTileSize = 512;
+inline constexpr int kDefaultReconTileSize = 640;
 // Smaller tiles spend most of their work on the halo they throw away; below
 // this a tile size is a typo, not a choice.
 inline constexpr int kMinReconTileSize = 16;

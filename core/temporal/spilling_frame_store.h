@@ -17,10 +17,10 @@ namespace gdvr {
 class SpillingFrameStore {
  public:
   // `memory_limit_bytes`: the frames kept in memory (their pixels) stay
-  // within it, the others go to files in `spill_dir` (which must exist);
-  // < 0: no limit, nothing is spilled.
+  // within it, the others go to files in `spill_dir` (which must exist;
+  // LayerSpillFile::spill); < 0: no limit, nothing is spilled.
   SpillingFrameStore(std::string spill_dir, long long memory_limit_bytes);
-  ~SpillingFrameStore();  // removes its spill files
+  ~SpillingFrameStore();  // spill files have no name: closing them frees the disk
   SpillingFrameStore(const SpillingFrameStore&) = delete;
   SpillingFrameStore& operator=(const SpillingFrameStore&) = delete;
 
@@ -38,8 +38,6 @@ class SpillingFrameStore {
   int most_spilled_frames() const { return most_spilled_; }
 
  private:
-  std::string spill_path(int frame) const;
-
   std::string dir_;
   long long limit_;
   int width_ = 0, height_ = 0;

@@ -58,6 +58,8 @@ class IntegratorRunner {
   virtual bool buffers_needed(int frame, int next_out) const { return frame >= next_out; }
   // Reconstruction windows solved so far (0 for an integrator without them).
   virtual int windows_solved() const { return 0; }
+  // Whether finalize reads FrameBuffers::spilled (run_job's memory limit).
+  virtual bool reads_spilled_buffers() const { return false; }
 
   // ---- Stage 2 by tiles (a farm's tiled finalize, docs/farm.md) ----
   // Only integrators with a window solve split it; the others refuse.

@@ -26,6 +26,7 @@ class TgptRunner final : public IntegratorRunner {
   Expected<FrameOutput> finalize(int frame, const std::map<int, FrameBuffers>& buffers) override;
   bool buffers_needed(int frame, int next_out) const override { return windows_.buffers_needed(frame, next_out); }
   int windows_solved() const override { return windows_.windows_solved(); }
+  bool reads_spilled_buffers() const override { return true; }
   Expected<TileGrid> tile_grid(int width, int height) const override { return windows_.tile_grid(width, height); }
   Expected<Image> reconstruct_tiles(int frame, const std::vector<int>& tiles,
                                     const std::map<int, FrameBuffers>& buffers) override;
