@@ -45,10 +45,13 @@ JobSpec tgpt_job(const std::string& temporal_shift, const std::string& frames, b
   return job;
 }
 
-std::vector<FrameOutput> run(const JobSpec& job) {
+// memory_limit_bytes >= 0: run_job spills its buffered frames beyond it.
+std::vector<FrameOutput> run(const JobSpec& job, long long memory_limit_bytes = -1) {
   JobRunOptions options;
   options.base_dir = demo_dir();
   options.threads = 2;
+  options.memory_limit_bytes = memory_limit_bytes;
+  options.spill_dir = ::testing::TempDir();
   std::vector<FrameOutput> out;
   JobCallbacks cb;
   cb.on_frame_final = [&](const FrameOutput& f) { out.push_back(f); };
@@ -241,21 +244,8 @@ TEST_P(TgptJobTest, SpilledBuffersAndTilesGiveTheFramesOfMemory) {
   JobSpec job = tgpt_job(GetParam(), "0-6", true, 4);
   job.width = job.height = 32;
   job.reconstruction.tile_size = 16;
-  JobRunOptions options;
-  options.base_dir = demo_dir();
-  options.threads = 2;
-  auto collect = [&](const JobRunOptions& o) {
-    std::vector<FrameOutput> out;
-    JobCallbacks cb;
-    cb.on_frame_final = [&](const FrameOutput& f) { out.push_back(f); };
-    Status st = run_job(job, o, cb, nullptr);
-    EXPECT_TRUE(st.ok()) << st.to_string();
-    return out;
-  };
-  const std::vector<FrameOutput> in_memory = collect(options);
-  options.memory_limit_bytes = 0;
-  options.spill_dir = ::testing::TempDir();
-  const std::vector<FrameOutput> spilled = collect(options);
+  const std::vector<FrameOutput> in_memory = run(job);
+  const std::vector<FrameOutput> spilled = run(job, /* memory_limit_bytes = */ 0);
   ASSERT_EQ(in_memory.size(), 7u);
   ASSERT_EQ(spilled.size(), 7u);
   for (size_t i = 0; i < 7; ++i) {
@@ -267,8 +257,7 @@ TEST_P(TgptJobTest, SpilledBuffersAndTilesGiveTheFramesOfMemory) {
   }
   // And the tiles agree with the whole-frame windows.
   job.reconstruction.tile_size = 0;
-  options.memory_limit_bytes = -1;
-  const std::vector<FrameOutput> whole = collect(options);
+  const std::vector<FrameOutput> whole = run(job);
   ASSERT_EQ(whole.size(), 7u);
   for (size_t i = 0; i < 7; ++i) {
     auto e = rel_mse_sums(in_memory[i].image.find("")->image, whole[i].image.find("")->image);
