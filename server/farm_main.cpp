@@ -39,6 +39,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/farm/buffer_store.h"
@@ -347,7 +348,14 @@ int main(int argc, char** argv) {
   int threads = 0;
   for (int i = 2; i < argc; ++i) {
     std::string a = argv[i];
+    // --name=value, as Kubernetes manifests write flags (deploy/k8s), is --name value.
+    std::optional<std::string> inline_value;
+    if (const size_t eq = a.find('='); a.rfind("--", 0) == 0 && eq != std::string::npos) {
+      inline_value = a.substr(eq + 1);
+      a = a.substr(0, eq);
+    }
     auto next = [&](const char* name) -> std::string {
+      if (inline_value) return *std::exchange(inline_value, std::nullopt);
       if (i + 1 >= argc) {
         usage((std::string(name) + " needs a value").c_str());
         std::exit(kExitUsage);
@@ -390,6 +398,7 @@ int main(int argc, char** argv) {
       job_path = a;
     else
       return usage(("unexpected argument " + a).c_str());
+    if (inline_value) return usage((a + " takes no value").c_str());
   }
   if (job_path.empty()) return usage("no job file given");
   if (!tiles_flag.empty() && verb != "finalize") return usage("--tiles belongs to finalize");

@@ -35,8 +35,11 @@ inline Expected<ReconMethod> parse_recon_method(const std::string& name) {
 inline constexpr double kDefaultReconAlpha = 0.2;
 
 // Tiled solve (docs/reconstruction.md, "Tiled solve"): frames wider or taller
-// than this are solved in tiles of at most this many pixels a side. Chosen
-// from gdvr-bench-tgpt --recon (docs/benchmarks.md, "Stage 2 by tiles").
+// than this are solved in tiles of at most this many pixels a side. 640
+// makes 720p 2x2 tiles holding 1.14x its pixels (512: 3x2, 1.3x, measurably
+// slower than the whole-frame solve) and keeps a 1080p or 4K tile's part of a
+// 20-frame window near 1.5 GB (gdvr-bench-tgpt --recon; docs/benchmarks.md,
+// "Stage 2 by tiles").
 inline constexpr int kDefaultReconTileSize = 640;
 // Smaller tiles spend most of their work on the halo they throw away; below
 // this a tile size is a typo, not a choice.

@@ -195,7 +195,7 @@ def tiles(args):
     rendered = [run([farm, "render", job, "--frames", chunk, "--buffers", buffers, "--threads", "1"])
                 for chunk in ("0-2", "3-5")]
     check(all(r.returncode == 0 for r in rendered), "tiles: render stage")
-    listing = run([farm, "tiles", job, "--tiles-per-task", "4"])
+    listing = run([farm, "tiles", job, "--tiles-per-task=4"])  # --name=value, as the k8s manifests write flags
     check(listing.returncode == 0 and listing.stdout.split() == ["0-3", "4-7", "8"],
           "tiles: gdvr-farm tiles lists the 3x3 grid in tasks of 4 " + repr(listing.stdout.split()))
     # One worker process per tile range, all at once; none writes a frame.
