@@ -166,7 +166,11 @@ Status TemporalWindowCache::solve(size_t window_index, int requested, const Fram
   auto solved = solve_tiles(
       grid.value(), w.end - w.start, [&](const PixelRect& padded) { return gradient_window(w, reader, padded); },
       solve_, sink, tile_subset_);
-  if (!solved.ok()) return solved.status();
+  if (!solved.ok()) {
+    // Some tiles may have been added: those blends are incomplete.
+    for (int k : targets) blends_.erase(k);
+    return solved.status();
+  }
   for (int k : targets) {
     Blend& b = blends_[k];
     b.weight += window_blend_weight(k, w.start, settings_.window);
