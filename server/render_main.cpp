@@ -29,9 +29,11 @@ int usage(const char* msg) {
       "usage: gdvr-render SCENE.xml|JOB.json --out DIR [--spp N] [--time-budget SECONDS]\n"
       "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
       "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
-      "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--keep-negative]\n"
-      "       [--param NAME=VALUE ...]\n"
-      "Flags override the job file; values are checked with the job (errors name the field).\n");
+      "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--tile-size N] [--keep-negative]\n"
+      "       [--param NAME=VALUE ...] [--memory-limit MIB [--spill-dir DIR]]\n"
+      "Flags override the job file; values are checked with the job (errors name the field).\n"
+      "--memory-limit: tgpt's buffered frames beyond MIB MiB go to unnamed files in DIR (default: the\n"
+      "temporary folder), read back a tile's region at a time.\n");
 }
 
 }  // namespace
@@ -42,12 +44,25 @@ int main(int argc, char** argv) {
   namespace fs = std::filesystem;
   if (argc < 2) return usage(nullptr);
   tools::JobFlags flags;
+  long long memory_limit_bytes = -1;
+  std::string spill_dir;
   for (int i = 1; i < argc; ++i) {
     auto taken = tools::take_job_flag(argc, argv, &i, {/* sampling = */ true, /* integrator = */ true}, &flags);
     if (!taken.ok()) return usage(taken.status().message().c_str());
     if (taken.value()) continue;
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") return usage(nullptr);
+    if ((a == "--memory-limit" || a == "--spill-dir") && i + 1 >= argc) return usage((a + " needs a value").c_str());
+    if (a == "--memory-limit") {
+      long long mib = 0;
+      if (!tools::parse_int(argv[++i], 0, 1LL << 30, &mib)) return usage("--memory-limit: expected MiB, >= 0");
+      memory_limit_bytes = mib << 20;
+      continue;
+    }
+    if (a == "--spill-dir") {
+      spill_dir = argv[++i];
+      continue;
+    }
     return usage(("unknown option " + a).c_str());
   }
   if (flags.input.empty()) return usage("no scene or job file given");
@@ -57,6 +72,8 @@ int main(int argc, char** argv) {
 
   JobRunOptions options;
   options.threads = flags.threads;
+  options.memory_limit_bytes = memory_limit_bytes;
+  options.spill_dir = spill_dir;
   auto flagged_job = tools::job_from_flags(flags, &options.base_dir);
   if (!flagged_job.ok()) {
     std::fprintf(stderr, "gdvr-render: %s\n", flagged_job.status().to_string().c_str());

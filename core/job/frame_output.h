@@ -3,10 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/io/layer_spill_file.h"
 
 namespace gdvr {
 
@@ -54,6 +56,10 @@ struct FrameBuffers {
   int frame = 0;
   LayeredImage layers;
   FrameStats stats;  // render-stage statistics; finalize adds its own
+  // Set when run_job spilled the layers to disk under its memory limit
+  // (JobRunOptions::memory_limit_bytes): `layers` is then empty, and an
+  // integrator that reads buffers by region (tgpt) reads them from here.
+  std::shared_ptr<const LayerSpillFile> spilled;
 };
 
 // Stage 2: the final frame.

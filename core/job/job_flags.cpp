@@ -29,7 +29,8 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
   }
   const bool sampling = offered.sampling && (a == "--spp" || a == "--time-budget");
   const bool integrator = offered.integrator && (a == "--integrator" || a == "--shift" || a == "--temporal-shift" ||
-                                                 a == "--recon" || a == "--alpha" || a == "--window");
+                                                 a == "--recon" || a == "--alpha" || a == "--window" ||
+                                                 a == "--tile-size");
   const bool common = a == "--out" || a == "--threads" || a == "--frames" || a == "--width" || a == "--height" ||
                       a == "--seed" || a == "--param" || a == "-D";
   if (offered.integrator && a == "--keep-negative") {
@@ -62,6 +63,7 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
   else if (a == "--height") return set_int(1, kMaxJobResolution, &flags->height);
   else if (a == "--spp") return set_int(1, kMaxJobSpp, &flags->spp);
   else if (a == "--window") return set_int(1, kMaxWindowFrames, &flags->window);
+  else if (a == "--tile-size") return set_int(0, kMaxJobResolution, &flags->tile_size);
   else if (a == "--seed") {
     long long v = 0;
     if (!parse_int(value, 0, 1LL << 62, &v)) return invalid_argument("--seed: expected a non-negative integer");
@@ -122,6 +124,7 @@ Expected<JobSpec> job_from_flags(const JobFlags& flags, std::string* base_dir) {
   if (flags.recon) job.reconstruction.method = *flags.recon;
   if (flags.alpha) job.reconstruction.alpha = *flags.alpha;
   if (flags.window) job.reconstruction.window = *flags.window;
+  if (flags.tile_size) job.reconstruction.tile_size = *flags.tile_size;
   if (flags.keep_negative) job.reconstruction.clamp_negative = false;
   for (const auto& [name, value] : flags.params) job.params[name] = value;
   GDVR_RETURN_IF_ERROR(validate(job));

@@ -19,7 +19,7 @@ namespace gdvr::tools {
 // --threads, --frames, --width, --height, --seed and --param (-D).
 struct JobFlagSet {
   bool sampling = false;    // --spp, --time-budget
-  bool integrator = false;  // --integrator, --shift, --temporal-shift, --recon, --alpha, --window, --keep-negative
+  bool integrator = false;  // --integrator, --shift, --temporal-shift, --recon, --alpha, --window, --tile-size, --keep-negative
 };
 
 struct JobFlags {
@@ -44,6 +44,7 @@ struct JobFlags {
   std::optional<ReconMethod> recon;
   std::optional<double> alpha;
   std::optional<int> window;
+  std::optional<int> tile_size;  // --tile-size: reconstruction.tile_size
   bool keep_negative = false;  // reconstruction.clamp_negative = false
   std::map<std::string, std::string> params;
 };

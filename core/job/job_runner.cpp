@@ -314,6 +314,17 @@ Expected<FrameOutput> JobFinalizer::finalize(int frame, const std::map<int, Fram
 
 int JobFinalizer::windows_solved() const { return runner_->windows_solved(); }
 
+Expected<TileGrid> JobFinalizer::tile_grid(int width, int height) const { return runner_->tile_grid(width, height); }
+
+Expected<Image> JobFinalizer::reconstruct_tiles(int frame, const std::vector<int>& tiles,
+                                                const std::map<int, FrameBuffers>& buffers) {
+  return runner_->reconstruct_tiles(frame, tiles, buffers);
+}
+
+Expected<FrameOutput> JobFinalizer::finalize_solved(int frame, const std::map<int, FrameBuffers>& buffers, Image solved) {
+  return runner_->finalize_solved(frame, buffers, std::move(solved));
+}
+
 Status render_job_buffers(const JobSpec& job, const JobRunOptions& options, const std::vector<int>& frames,
                           const std::function<Status(FrameBuffers&&)>& on_buffers,
                           const std::function<void(const JobProgress&)>& on_progress,
@@ -378,6 +389,19 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
     auto rendered = renderer.value()->render(frame, control);
     if (!rendered.ok()) return rendered.status().with_context("frame " + std::to_string(frame) + ": ");
     buffers[frame] = std::move(rendered.value());
+    if (options.memory_limit_bytes >= 0 && runner.reads_spilled_buffers()) {
+      // Over the limit, the frame just rendered goes to disk (finalize and
+      // the tiled window solve read it back a region at a time).
+      long long held = 0;
+      for (const auto& [f, fb] : buffers) held += layer_pixel_bytes(fb.layers);
+      if (held > options.memory_limit_bytes) {
+        FrameBuffers& fb = buffers[frame];
+        auto file = LayerSpillFile::spill(options.spill_dir, fb.layers);
+        if (!file.ok()) return file.status().with_context("frame " + std::to_string(frame) + ": --memory-limit: ");
+        fb.spilled = std::move(file.value());
+        fb.layers = LayeredImage();
+      }
+    }
     schedule.rendered(frame);
     progress.frame_done();
     // Stage 2 and the caller's work on each final frame: on the budget too.

@@ -14,6 +14,7 @@
 #include "core/image/image.h"
 #include "core/job/frame_output.h"
 #include "core/job/job_spec.h"
+#include "core/recon/tile_grid.h"
 #include "core/util/status.h"
 
 namespace gdvr {
@@ -34,6 +35,13 @@ struct JobRunOptions {
   // report's denoiser), which a time budget must pay for as well: run_job
   // measures what on_frame_final takes, and this is its guess until then.
   double caller_seconds_per_frame = 0;
+  // The buffered frames a streaming stage 2 holds (tgpt's windows) stay in
+  // memory up to this many bytes of pixels; beyond it a frame's buffers go to
+  // an unnamed file in spill_dir (empty: the system's temporary folder) and
+  // the window solve reads each tile's region from there (docs/tgpt.md,
+  // "Memory"). < 0: no limit. Integrators that hold no frames ignore it.
+  long long memory_limit_bytes = -1;
+  std::string spill_dir;
 };
 
 struct JobCallbacks {
@@ -123,6 +131,18 @@ class JobFinalizer {
   Expected<FrameOutput> finalize(int frame, const std::map<int, FrameBuffers>& buffers);
   // Reconstruction windows solved so far (0 for pt and gpt, which have none).
   int windows_solved() const;
+
+  // ---- By tiles (a farm's tiled finalize: docs/farm.md; tgpt only, the
+  // others refuse with kUnimplemented) ----
+  // The reconstruction's tile grid for frames of width × height.
+  Expected<TileGrid> tile_grid(int width, int height) const;
+  // `frame`'s reconstructed image before the direct light, only the cores of
+  // `tiles` solved (0 elsewhere). Frames in increasing order share windows.
+  Expected<Image> reconstruct_tiles(int frame, const std::vector<int>& tiles,
+                                    const std::map<int, FrameBuffers>& buffers);
+  // finalize with the reconstructed image given (all tiles' parts pasted):
+  // the same frame as finalize, bit for bit; `buffers` need only the frame and the next.
+  Expected<FrameOutput> finalize_solved(int frame, const std::map<int, FrameBuffers>& buffers, Image solved);
 
  private:
   explicit JobFinalizer(std::unique_ptr<IntegratorRunner> runner);

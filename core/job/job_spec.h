@@ -24,6 +24,9 @@ struct ReconstructionSpec {
   ReconMethod method = kDefaultJobReconMethod;
   double alpha = kDefaultReconAlpha;
   int window = kDefaultWindowFrames;  // frames in the temporal sliding window
+  // T-GPT's window solve by tiles of at most tile_size pixels a side for
+  // larger frames (docs/reconstruction.md, "Tiled solve"); 0: never tiled.
+  int tile_size = kDefaultReconTileSize;
   // Extra weight per term (primal, dx, dy, dt, dxdt, dydt); empty = all 1.
   // 0 drops a term (e.g. {1, 1, 1, 0, 0, 0}: a window without temporal terms).
   std::vector<double> term_weights;

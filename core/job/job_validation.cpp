@@ -31,6 +31,9 @@ Status validate_reconstruction(const ReconstructionSpec& r) {
   if (!(r.alpha >= 0) || !std::isfinite(r.alpha)) return field_error("reconstruction.alpha", "must be >= 0");
   if (r.window < 1 || r.window > kMaxWindowFrames)
     return field_error("reconstruction.window", "must be in [1, " + std::to_string(kMaxWindowFrames) + "]");
+  if (r.tile_size != 0 && (r.tile_size < kMinReconTileSize || r.tile_size > kMaxJobResolution))
+    return field_error("reconstruction.tile_size", "must be 0 (no tiling) or in [" + std::to_string(kMinReconTileSize) +
+                                                       ", " + std::to_string(kMaxJobResolution) + "]");
   return Status::Ok();
 }
 

@@ -26,7 +26,7 @@ std::string ConstraintLayout::to_string() const {
   return s.str();
 }
 
-ConstraintLayout build_constraint_layout(const GradientWindow& window) {
+ConstraintLayout build_constraint_layout(const GradientWindow& window, const PixelRect* counted) {
   ConstraintLayout L;
   L.grid = {window.width(), window.height(), window.size()};
   L.channels = window.channels();
@@ -53,8 +53,9 @@ ConstraintLayout build_constraint_layout(const GradientWindow& window) {
       for (int y = 0; y < y_end; ++y)
         for (int x = 0; x < x_end; ++x) {
           const size_t p = size_t(y) * g.width + x;
+          const bool count = !counted || counted->contains(x, y);
           if (!user.empty() && !user[p]) {
-            ++mk;
+            mk += count;
             continue;
           }
           bool finite = true;
@@ -63,7 +64,7 @@ ConstraintLayout build_constraint_layout(const GradientWindow& window) {
             if (var) finite &= std::isfinite(var[p * C + c]) && var[p * C + c] >= 0;
           }
           if (!finite) {
-            ++nf;
+            nf += count;
             continue;
           }
           valid[g.index(x, y, t)] = 1;

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/image/pixel_rect.h"
 #include "core/recon/grid.h"
 #include "core/recon/gradient_window.h"
 
@@ -32,8 +33,10 @@ struct ConstraintLayout {
   std::string to_string() const;
 };
 
-// Requires window.validate() to have passed.
-ConstraintLayout build_constraint_layout(const GradientWindow& window);
+// Requires window.validate() to have passed. `counted`, when given, limits the
+// non_finite / masked counts to constraints at its pixels (a tile's core: the
+// halos of neighbouring tiles overlap, and must not count a pixel twice).
+ConstraintLayout build_constraint_layout(const GradientWindow& window, const PixelRect* counted = nullptr);
 
 // One byte per pixel (planar), bit term_index(t) set where constraint t exists:
 // the L2 solver's whole weight state (PoissonSystem's mask mode).

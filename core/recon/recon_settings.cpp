@@ -40,6 +40,10 @@ Status ReconSettings::validate() const {
   if (l1_epsilon_decay > 1) return invalid_argument("recon settings: l1_epsilon_decay must be <= 1");
   GDVR_RETURN_IF_ERROR(at_least(cv_iterations, 0, "cv_iterations"));
   GDVR_RETURN_IF_ERROR(positive_finite(variance_floor, "variance_floor"));
+  if (tile_size != 0 && tile_size < kMinReconTileSize)
+    return invalid_argument("recon settings: tile_size must be 0 (no tiling) or >= " + std::to_string(kMinReconTileSize) +
+                            ", got " + std::to_string(tile_size));
+  GDVR_RETURN_IF_ERROR(at_least(tile_halo, 0, "tile_halo"));
   return Status::Ok();
 }
 
@@ -53,7 +57,7 @@ std::string ReconSettings::to_string() const {
     << " l1_epsilon_decay=" << l1_epsilon_decay
     << " l1_low_frequencies_from_primal=" << (l1_low_frequencies_from_primal ? "true" : "false")
     << " cv_iterations=" << cv_iterations
-    << " variance_floor=" << variance_floor;
+    << " variance_floor=" << variance_floor << " tile_size=" << tile_size << " tile_halo=" << tile_halo;
   return s.str();
 }
 

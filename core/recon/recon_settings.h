@@ -34,6 +34,22 @@ inline Expected<ReconMethod> parse_recon_method(const std::string& name) {
 // the default of every job.
 inline constexpr double kDefaultReconAlpha = 0.2;
 
+// Tiled solve (docs/reconstruction.md, "Tiled solve"): frames wider or taller
+// than this are solved in tiles of at most this many pixels a side. 640
+// makes 720p 2x2 tiles holding 1.14x its pixels (512: 3x2, 1.3x, measurably
+// slower than the whole-frame solve) and keeps a 1080p or 4K tile's part of a
+// 20-frame window near 1.5 GB (gdvr-bench-tgpt --recon; docs/benchmarks.md,
+// "Stage 2 by tiles").
+inline constexpr int kDefaultReconTileSize = 640;
+// Smaller tiles spend most of their work on the halo they throw away; below
+// this a tile size is a typo, not a choice.
+inline constexpr int kMinReconTileSize = 16;
+// Overlap on each side of a tile's core: the measured impulse response of the
+// α = 0.2 operator is 4e-5 of its peak here, and what the cut halo changes
+// in a core is ~80x smaller than what the default CG tolerance itself leaves
+// (docs/reconstruction.md, "Tiled solve").
+inline constexpr int kDefaultReconTileHalo = 32;
+
 struct ReconSettings {
   // The library's default for a caller that builds ReconSettings itself (the
   // benchmarks, the solver tests): L2, the screened Poisson solve the other
@@ -64,6 +80,14 @@ struct ReconSettings {
   int cv_iterations = 50;
   // Variances below this are clamped so inverse-variance weights stay finite.
   double variance_floor = 1e-8;
+
+  // ---- Tiled solve (used by T-GPT's window cache and reconstruct_tiled) ----
+  // 0: never tile; otherwise frames larger than tile_size in either axis are
+  // solved as tiles of at most tile_size² core pixels, each over its core plus
+  // tile_halo pixels per side (the control variates use at least cv_iterations:
+  // tiled_reconstruct.h).
+  int tile_size = kDefaultReconTileSize;
+  int tile_halo = kDefaultReconTileHalo;
 
   double term_weight(Term t) const { return term_weights[term_index(t)]; }
   Status validate() const;  // names the offending field

@@ -42,13 +42,12 @@ Status solve_none(const GradientWindow& window, const ConstraintLayout& layout, 
   return Status::Ok();
 }
 
-}  // namespace
-
-Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings) {
+Expected<ReconResult> reconstruct_counting(const GradientWindow& window, const ReconSettings& settings,
+                                           const PixelRect* counted) {
   const auto t0 = std::chrono::steady_clock::now();
   GDVR_RETURN_IF_ERROR(settings.validate());
   GDVR_RETURN_IF_ERROR(window.validate());
-  const ConstraintLayout layout = build_constraint_layout(window);
+  const ConstraintLayout layout = build_constraint_layout(window, counted);
 
   ReconResult result;
   for (int t = 0; t < window.size(); ++t) result.frames.emplace_back(window.width(), window.height(), window.channels());
@@ -77,6 +76,17 @@ Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSetti
   }
   result.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
+}
+
+}  // namespace
+
+Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings) {
+  return reconstruct_counting(window, settings, nullptr);
+}
+
+Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings,
+                                  const PixelRect& counted) {
+  return reconstruct_counting(window, settings, &counted);
 }
 
 Expected<ReconResult> reconstruct_frame(const GradientFrame& frame, const ReconSettings& settings) {

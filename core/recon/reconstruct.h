@@ -2,6 +2,7 @@
 // buffers to images (the reconstructor knows nothing of the renderer: docs/architecture.md).
 #pragma once
 
+#include "core/image/pixel_rect.h"
 #include "core/recon/gradient_window.h"
 #include "core/recon/recon_result.h"
 #include "core/recon/recon_settings.h"
@@ -12,6 +13,10 @@ namespace gdvr {
 // settings.method. Invalid settings or buffers give kInvalidArgument; NaN/Inf
 // samples are dropped (counted in stats), never propagated to the output.
 Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings);
+// Same, with the stats' dropped-constraint counts limited to the pixels of
+// `counted` (a tile's core in the tile's coordinates: tiled_reconstruct.h).
+Expected<ReconResult> reconstruct(const GradientWindow& window, const ReconSettings& settings,
+                                  const PixelRect& counted);
 
 // One frame, spatial terms only (W = 1).
 Expected<ReconResult> reconstruct_frame(const GradientFrame& frame, const ReconSettings& settings);

@@ -20,11 +20,15 @@
 
 #include <functional>
 #include <map>
+#include <memory>
+#include <set>
 #include <vector>
 
 #include "core/image/image.h"
+#include "core/image/pixel_rect.h"
 #include "core/recon/gradient_window.h"
 #include "core/recon/recon_result.h"
+#include "core/recon/tiled_reconstruct.h"
 #include "core/temporal/tgpt_settings.h"
 
 namespace gdvr {
@@ -42,8 +46,25 @@ std::vector<int> positions_needed(int frame_count, int window, int hop, int inde
 // with nominal size `window` (> 0 everywhere inside the window).
 double window_blend_weight(int index, int start, int window);
 
-// Solves one window: one image per frame of the window, and the solve's numbers.
-using WindowSolver = std::function<Expected<ReconResult>(const GradientWindow&)>;
+// Solves one window (or one tile of it: docs/reconstruction.md, "Tiled
+// solve"): one image per frame of the window, and the solve's numbers, whose
+// dropped-constraint counts cover the pixels of `counted` only (a tile's core).
+using WindowSolver = std::function<Expected<ReconResult>(const GradientWindow&, const PixelRect& counted)>;
+
+// A shot's stage-1 buffers as the window solve reads them, a region at a time:
+// a tiled solve (frames larger than recon.tile_size) reads each tile's part of
+// the window's frames only, so the frames may live on disk
+// (spilling_frame_store.h) and stage 2 holds one tile of the window at a time.
+struct FrameRegionReader {
+  int width = 0, height = 0;  // of the shot's frames
+  // `frame`'s layers cropped to `rect`: null when its buffers are not
+  // available, an error when reading them fails.
+  std::function<Expected<std::shared_ptr<const LayeredImage>>(int frame, const PixelRect& rect)> read;
+};
+// Region reads of frames held whole in memory (`layers` gives null for a
+// frame it lacks): the whole frame is borrowed, a region is a copy.
+FrameRegionReader in_memory_region_reader(int width, int height,
+                                          std::function<const LayeredImage*(int frame)> layers);
 
 // The windows of one shot in the job's frame numbers, each solved at most once
 // while a frame still to come needs it.
@@ -64,10 +85,15 @@ class TemporalWindowCache {
   using FrameLayers = std::function<const LayeredImage*(int frame)>;
   // The reconstructed indirect image (without "direct") of `frame`: the Hann
   // blend of the solutions of all windows containing it. Solves (and keeps)
-  // the windows not solved yet.
+  // the windows not solved yet, by tiles when the frames are larger than
+  // recon.tile_size.
   Expected<Image> reconstruct(int frame, const FrameLayers& layers, ReconStats* stats);
-  // Frees the solutions of windows whose last frame is `frame` or earlier:
-  // once frames come out in increasing order, no later frame reads them.
+  // Same, reading the frames' buffers a region at a time.
+  Expected<Image> reconstruct(int frame, const FrameRegionReader& reader, ReconStats* stats);
+  // Frees the solutions of windows whose last frame is `frame` or earlier, and
+  // the solved images of frames up to `frame` in the windows kept: once frames
+  // come out in increasing order, no later frame reads them (a frame asked
+  // for again is solved again).
   void release_through(int frame);
   // Whether the held buffers of `frame` are still read once every frame
   // before `next_out` is out (next_out past the shot's last frame: all are
@@ -77,17 +103,47 @@ class TemporalWindowCache {
   // frames of buffers instead of W + H.
   bool buffers_needed(int frame, int next_out) const;
 
+  // Solve only these tiles of the tile grid (tiled_reconstruct.h; all when
+  // empty): a farm's tiled finalize, where each task solves some tiles and a
+  // last step pastes them together. Pixels outside their cores come out 0.
+  // Changing the subset forgets what was solved.
+  void solve_only_tiles(std::vector<int> tiles);
+  // The tile grid the windows are solved with, for frames of width × height.
+  Expected<TileGrid> tile_grid(int width, int height) const { return tile_grid_for(settings_.recon, width, height); }
+
   int windows_solved() const { return windows_solved_; }
+  // Windows solved whose frames are not all out yet.
   int cached_windows() const { return int(solved_.size()); }
 
  private:
-  Status solve(size_t window_index, const FrameLayers& layers, ReconStats* stats);
+  // A frame's blend so far: Σ weight · solution over the windows in
+  // `windows`, always added in increasing window order (so a frame's image
+  // does not depend on the order frames are asked for).
+  struct Blend {
+    Image sum;
+    double weight = 0;
+    std::set<size_t> windows;
+  };
+  // Solves window `window_index` (by tiles if the frames are large) and adds
+  // its solution to the blends of its frames not out yet and of
+  // `requested` (a shot position).
+  Status solve(size_t window_index, int requested, const FrameRegionReader& reader, ReconStats* stats);
+  // Adds `weight` × `solved` (a region `core` of a tile of the window, placed
+  // at `at` in the frame) to the blend of shot position `index`.
+  void add_to_blend(size_t window_index, int index, const Image& solved, const PixelRect& core, int at_x, int at_y,
+                    int width, int height);
+  // The window's frames cropped to `rect`, as the reconstruction sees them.
+  Expected<GradientWindow> gradient_window(const WindowRange& w, const FrameRegionReader& reader,
+                                           const PixelRect& rect) const;
 
   TgptSettings settings_;
   std::vector<int> frames_;
   WindowSolver solve_;
   std::vector<WindowRange> windows_;
-  std::map<size_t, std::vector<Image>> solved_;  // by window index
+  std::map<int, Blend> blends_;  // by shot position, frames not out yet
+  std::set<size_t> solved_;      // windows solved whose frames are not all out
+  int released_end_ = 0;         // shot positions before it are out
+  std::vector<int> tile_subset_;  // empty: every tile
   int windows_solved_ = 0;
 };
 

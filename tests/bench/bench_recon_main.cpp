@@ -5,6 +5,15 @@
 //   gdvr-bench-recon [--threads N] [--runs R] [--width W] [--height H]
 //                    [--frames F] [--methods l2,l1] [--no-window] [--no-single]
 //                    [--l2-tolerance T] [--l1-inner N] [--l1-outer N] [--l1-inner-tolerance T]
+//                    [--alpha A] [--tile-size N] [--tile-halo H] [--diff-png PATH]
+//   gdvr-bench-recon --impulse [--alpha A] [--frames F]
+// --tile-size N also solves each case by tiles (core/recon/tiled_reconstruct.h)
+// and reports the time and the agreement with the whole-frame solve (max
+// |difference|, relMSE, the seam metric along tile borders); --diff-png
+// writes |tiled − whole| of the centre frame around a tile corner, scaled
+// so that the largest difference is white.
+// --impulse prints the L2 operator's impulse response against distance, from
+// which the default halo is chosen (docs/reconstruction.md, "Tiled solve").
 #include <sys/resource.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -20,7 +29,12 @@
 #include <string>
 #include <vector>
 
+#include "core/image/error_metrics.h"
+#include "core/io/image_io.h"
+#include "core/recon/impulse_response.h"
 #include "core/recon/reconstruct.h"
+#include "core/recon/tile_seams.h"
+#include "core/recon/tiled_reconstruct.h"
 #include "core/temporal/tgpt_settings.h"
 #include "core/util/cli_args.h"
 #include "core/util/memory_tuning.h"
@@ -32,8 +46,13 @@ using namespace gdvr;
 struct Args {
   int threads = 0, runs = 3, width = 1280, height = 720, frames = 20;
   std::vector<ReconMethod> methods = {ReconMethod::kL2, ReconMethod::kL1};
-  bool single = true, window = true;
+  bool single = true, window = true, impulse = false;
+  int tile_size = 0;
+  std::string diff_png;
   ReconSettings settings;
+  bool variances() const {
+    return std::find(methods.begin(), methods.end(), ReconMethod::kWeighted) != methods.end();
+  }
 };
 
 double peak_rss_mib() {
@@ -50,11 +69,16 @@ float value(int x, int y, int t, int c) {
   return s + edge;
 }
 
-std::shared_ptr<const GradientFrame> make_frame(int W, int H, int t, bool temporal) {
+// `variances`: the noise's true variances too (the weighted control variates need them).
+std::shared_ptr<const GradientFrame> make_frame(int W, int H, int t, bool temporal, bool variances) {
   auto f = std::make_shared<GradientFrame>();
   for (Term term : kAllTerms) {
     if (is_temporal(term) && !temporal) continue;
     f->buffer(term) = Image(W, H, 3);
+    if (variances) {
+      f->variance(term) = Image(W, H, 3);
+      for (float& v : f->variance(term).data()) v = term == Term::kPrimal ? 0.01f : 0.0009f;
+    }
   }
   tbb::parallel_for(0, H, [&](int y) {
     std::mt19937 rng(unsigned(t * 100003 + y));
@@ -86,12 +110,88 @@ double rms_error(const Image& img, int t) {
   return std::sqrt(e / (img.pixel_count() * 3.0));
 }
 
+// The tiled solve against the whole-frame one, on the same window.
+void compare_tiled(const char* label, const GradientWindow& w, const ReconSettings& s, const ReconResult& whole,
+                   int runs, int frames_per_output, const std::string& diff_png) {
+  std::vector<double> times;
+  ReconResult tiled;
+  for (int r = 0; r < runs; ++r) {
+    auto res = reconstruct_tiled(w, s);
+    if (!res.ok()) {
+      std::fprintf(stderr, "%s\n", res.status().to_string().c_str());
+      std::exit(1);
+    }
+    times.push_back(res->stats.seconds);
+    tiled = std::move(res.value());
+  }
+  std::sort(times.begin(), times.end());
+  const TileGrid grid = tile_grid_for(s, w.width(), w.height()).value();
+  double max_abs = 0;
+  RelMseSums sums;
+  SeamMetric seam_tiled, seam_whole;
+  for (size_t t = 0; t < whole.frames.size(); ++t) {
+    for (size_t i = 0; i < whole.frames[t].data().size(); ++i)
+      max_abs = std::max(max_abs, double(std::fabs(tiled.frames[t].data()[i] - whole.frames[t].data()[i])));
+    sums.add(rel_mse_sums(tiled.frames[t], whole.frames[t]).value());
+    const SeamMetric a = tile_seam_metric(tiled.frames[t], grid), b = tile_seam_metric(whole.frames[t], grid);
+    seam_tiled.border += a.border / whole.frames.size();
+    seam_tiled.elsewhere += a.elsewhere / whole.frames.size();
+    seam_whole.border += b.border / whole.frames.size();
+    seam_whole.elsewhere += b.elsewhere / whole.frames.size();
+  }
+  const double median = times[times.size() / 2];
+  std::printf("%-22s %-3s tiled (%s) median %8.3f s  per output frame %7.3f s  cg_iterations %d  "
+              "vs whole: max|diff| %.2e  relMSE global %.2e per-pixel %.2e  seam border/elsewhere %.4f (whole %.4f), "
+              "border tiled/whole %.5f  peak_rss %.0f MiB\n",
+              label, recon_method_name(s.method), grid.to_string().c_str(), median, median / frames_per_output,
+              tiled.stats.cg_iterations, max_abs, sums.global(), sums.per_pixel(), seam_tiled.ratio(),
+              seam_whole.ratio(), seam_tiled.border / seam_whole.border, peak_rss_mib());
+  std::fflush(stdout);
+  if (!diff_png.empty() && grid.count() > 1) {
+    // 256×256 around the corner where the first four tiles meet (or the first border).
+    const int cx = grid.tile(std::min(1, grid.count() - 1)).core.x0;
+    const int cy = grid.rows() > 1 ? grid.tile(grid.columns()).core.y0 : w.height() / 2;
+    const int x0 = std::clamp(cx - 128, 0, std::max(0, w.width() - 256)),
+              y0 = std::clamp(cy - 128, 0, std::max(0, w.height() - 256));
+    const int t = w.size() / 2;
+    Image diff(std::min(256, w.width()), std::min(256, w.height()), 3);
+    float largest = 0;
+    for (int y = 0; y < diff.height(); ++y)
+      for (int x = 0; x < diff.width(); ++x)
+        for (int c = 0; c < 3; ++c) {
+          diff.at(x, y, c) = std::fabs(tiled.frames[t].at(x0 + x, y0 + y, c) - whole.frames[t].at(x0 + x, y0 + y, c));
+          largest = std::max(largest, diff.at(x, y, c));
+        }
+    // Scaled so that the largest difference is white: a seam would be a line.
+    if (largest > 0)
+      for (float& v : diff.data()) v /= largest;
+    if (Status st = write_png8(diff_png, diff); !st.ok()) std::fprintf(stderr, "%s\n", st.to_string().c_str());
+    else std::printf("wrote %s: |tiled - whole| / %.2e, frame %d, pixels [%d,%d)x[%d,%d)\n", diff_png.c_str(), largest, t,
+                     x0, x0 + diff.width(), y0, y0 + diff.height());
+  }
+}
+
+// The operator's impulse response against distance (core/recon/impulse_response.h).
+void impulse_response(const Args& a) {
+  const int size = 161;
+  auto r = impulse_response_by_distance(a.settings, size, a.frames);
+  if (!r.ok()) {
+    std::fprintf(stderr, "%s\n", r.status().to_string().c_str());
+    std::exit(1);
+  }
+  std::printf("impulse response, alpha %g, %d frames of %dx%d, all six terms (CG to 1e-10): "
+              "max |x| at Chebyshev distance r / peak\n",
+              a.settings.alpha, a.frames, size, size);
+  for (int d = 0; d <= size / 2; d += 4) std::printf("  r = %3d  %.3e\n", d, r.value()[size_t(d)]);
+}
+
 void bench(const char* label, const GradientWindow& w, ReconSettings s, ReconMethod m, int runs,
-           int frames_per_output) {
+           int frames_per_output, const Args& a) {
   s.method = m;
   std::vector<double> times;
   ReconStats stats;
   double err = 0;
+  ReconResult last;
   for (int r = 0; r < runs; ++r) {
     auto res = reconstruct(w, s);
     if (!res.ok()) {
@@ -101,6 +201,7 @@ void bench(const char* label, const GradientWindow& w, ReconSettings s, ReconMet
     times.push_back(res->stats.seconds);
     stats = res->stats;
     err = rms_error(res->frames[w.size() / 2], w.size() / 2);
+    last = std::move(res.value());
   }
   std::sort(times.begin(), times.end());
   const double median = times[times.size() / 2];
@@ -110,6 +211,10 @@ void bench(const char* label, const GradientWindow& w, ReconSettings s, ReconMet
               stats.cg_iterations, stats.relative_residual, err,
               rms_error(w.frames[w.size() / 2]->buffer(Term::kPrimal), w.size() / 2), peak_rss_mib());
   std::fflush(stdout);
+  if (a.tile_size > 0) {
+    s.tile_size = a.tile_size;
+    compare_tiled(label, w, s, last, runs, frames_per_output, a.diff_png);
+  }
 }
 
 // The hop of T-GPT's sliding window of `frames` frames (core/temporal/temporal_window.h).
@@ -144,6 +249,11 @@ int main(int argc, char** argv) {
     else if (k == "--l1-inner") a.settings.l1_inner_iterations = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 100000));
     else if (k == "--l1-outer") a.settings.l1_outer_iterations = int(tools::int_option("gdvr-bench-recon", k, next(), 1, 100000));
     else if (k == "--no-single") a.single = false;
+    else if (k == "--impulse") a.impulse = true;
+    else if (k == "--alpha") a.settings.alpha = tools::number_option("gdvr-bench-recon", k, next(), 1e-6, 1e6);
+    else if (k == "--tile-size") a.tile_size = int(tools::int_option("gdvr-bench-recon", k, next(), 16, 1 << 20));
+    else if (k == "--tile-halo") a.settings.tile_halo = int(tools::int_option("gdvr-bench-recon", k, next(), 0, 1 << 20));
+    else if (k == "--diff-png") a.diff_png = next();
     else if (k == "--methods") {
       a.methods.clear();
       std::stringstream ss(next());
@@ -167,22 +277,26 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s\n", st.to_string().c_str());
     return 2;
   }
+  if (a.impulse) {
+    impulse_response(a);
+    return 0;
+  }
   std::printf("gdvr-bench-recon: %dx%d, threads %d, runs %d, window %d frames (hop %d)\n", a.width, a.height, threads,
               a.runs, a.frames, window_hop(a.frames));
 
   if (a.single) {
     GradientWindow w;
-    w.frames.push_back(make_frame(a.width, a.height, 0, false));
-    for (ReconMethod m : a.methods) bench("single frame", w, a.settings, m, a.runs, 1);
+    w.frames.push_back(make_frame(a.width, a.height, 0, false, a.variances()));
+    for (ReconMethod m : a.methods) bench("single frame", w, a.settings, m, a.runs, 1, a);
   }
   if (a.window) {
     GradientWindow w;
-    for (int t = 0; t < a.frames; ++t) w.frames.push_back(make_frame(a.width, a.height, t, true));
+    for (int t = 0; t < a.frames; ++t) w.frames.push_back(make_frame(a.width, a.height, t, true, a.variances()));
     // The sliding window advances by its hop: each solve pays for hop frames.
     const int hop = window_hop(a.frames);
     char label[64];
     std::snprintf(label, sizeof label, "window %d (hop %d)", a.frames, hop);
-    for (ReconMethod m : a.methods) bench(label, w, a.settings, m, a.runs, hop);
+    for (ReconMethod m : a.methods) bench(label, w, a.settings, m, a.runs, hop, a);
   }
   return 0;
 }

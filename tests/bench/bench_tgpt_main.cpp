@@ -14,6 +14,9 @@
 //   gdvr-bench-tgpt --quality [--res 64] [--frames 24] [--spp 8] [--ref-spp 2048] [--runs 3] [--window 20]
 //                   [--ref-cache /tmp/tgpt_ref]   (reference EXRs written once, then read)
 //   gdvr-bench-tgpt --recon [--width 1280 --height 720] [--shot 40] [--window 20] [--method l2]
+//                   [--tile-size 512] [--tile-halo 48] [--memory-limit-mib M] [--spill-dir DIR]
+//   (--tile-size 0: the whole-frame solve; --memory-limit-mib: buffered frames
+//   beyond M MiB are spilled to DIR and read back a tile at a time; -1: none)
 // Run from the repository root (or pass --demo PATH to the job file).
 #include <algorithm>
 #include <chrono>
@@ -28,10 +31,14 @@
 #include <vector>
 
 #include <sys/resource.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include "core/io/image_io.h"
 #include "core/job/job_runner.h"
 #include "core/recon/recon_settings.h"
+#include "core/recon/tiled_reconstruct.h"
+#include "core/temporal/spilling_frame_store.h"
 #include "core/temporal/stream_schedule.h"
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/temporal_window.h"
@@ -48,6 +55,9 @@ struct Args {
   std::string demo = "scenes/demo/demo_job.json";
   int res = 64, frames = 24, spp = 8, ref_spp = 2048, runs = 3, window = 20, threads = 2;
   int width = 1280, height = 720, shot = 40;
+  int tile_size = kDefaultReconTileSize, tile_halo = kDefaultReconTileHalo;
+  long long memory_limit_mib = -1;
+  std::string spill_dir = "/tmp";
   std::string method = "l2";
   std::string ref_cache;  // prefix of cached reference EXRs (computed once, reused)
 };
@@ -283,8 +293,7 @@ int quality(const Args& a) {
 
 // ---- Stage 2 throughput on synthetic buffers ----
 
-LayeredImage synthetic_frame(int w, int h, int t, int n, std::mt19937& rng) {
-  std::normal_distribution<float> noise(0.0f, 0.1f), gnoise(0.0f, 0.03f);
+LayeredImage synthetic_frame(int w, int h, int t, int n) {
   auto field = [&](int x, int y, int f) {
     const float u = float(x) / w, v = float(y) / h, s = 0.02f * f;
     return 0.5f + 0.3f * std::sin(6.0f * (u + s)) * std::cos(4.0f * v) + ((u + s) > 0.5f ? 0.2f : 0.0f);
@@ -294,7 +303,11 @@ LayeredImage synthetic_frame(int w, int h, int t, int n, std::mt19937& rng) {
   for (int pass = 0; pass < 2; ++pass) {
     // Pass A of frame t is the replay of pass B of t−1: both sample frame t here.
     Image p(w, h, 3), dx(w, h, 3), dy(w, h, 3), var(w, h, 3);
-    for (int y = 0; y < h; ++y)
+    // Rows in parallel, one noise stream per (frame, pass, row): 4K frames
+    // would otherwise take longer to make than to solve.
+    tbb::parallel_for(0, h, [&](int y) {
+      std::mt19937 rng(unsigned((t * 2 + pass) * 1000003 + y));
+      std::normal_distribution<float> noise(0.0f, 0.1f), gnoise(0.0f, 0.03f);
       for (int x = 0; x < w; ++x)
         for (int c = 0; c < 3; ++c) {
           const float i0 = field(x, y, t);
@@ -303,6 +316,7 @@ LayeredImage synthetic_frame(int w, int h, int t, int n, std::mt19937& rng) {
           dy.at(x, y, c) = (y + 1 < h ? field(x, y + 1, t) - i0 : 0.0f) + gnoise(rng);
           var.at(x, y, c) = 0.01f;
         }
+    });
     const std::string pre = pass == 0 ? "a_" : "b_";
     L.add(pre + "primal", rgb, std::move(p));
     L.add(pre + "dx", rgb, std::move(dx));
@@ -319,7 +333,10 @@ LayeredImage synthetic_frame(int w, int h, int t, int n, std::mt19937& rng) {
   return L;
 }
 
+constexpr int kOutputBandRows = 128;
+
 int recon(const Args& a) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(a.threads));
   TgptSettings s;
   s.window = a.window;
   auto method = parse_recon_method(a.method);
@@ -328,7 +345,13 @@ int recon(const Args& a) {
     return 1;
   }
   s.recon.method = method.value();
+  s.recon.tile_size = a.tile_size;
+  s.recon.tile_halo = a.tile_halo;
   s.max_same_pixel_motion_px = -1;
+  if (Status st = s.validate(); !st.ok()) {
+    std::fprintf(stderr, "%s\n", st.to_string().c_str());
+    return 2;
+  }
   const int n = a.shot;
   std::vector<int> todo;
   for (int f = 0; f < n; ++f) todo.push_back(f);
@@ -336,29 +359,39 @@ int recon(const Args& a) {
   std::vector<std::vector<int>> needs;
   for (int f : todo) needs.push_back(cache.frames_needed(f));
   StreamSchedule schedule(todo, needs);
-  std::map<int, LayeredImage> buffers;
-  std::mt19937 rng(1234);
+  SpillingFrameStore buffers(a.spill_dir, a.memory_limit_mib < 0 ? -1 : a.memory_limit_mib << 20);
   double solve_seconds = 0, gen_seconds = 0;
   int emitted = 0;
   const auto t0 = Clock::now();
+  auto fail = [](const Status& st) {
+    std::fprintf(stderr, "%s\n", st.to_string().c_str());
+    return 1;
+  };
   for (int f : schedule.render_order()) {
     const auto g0 = Clock::now();
-    buffers[f] = synthetic_frame(a.width, a.height, f, n, rng);
+    LayeredImage frame = synthetic_frame(a.width, a.height, f, n);
     gen_seconds += seconds_since(g0);
+    // Spilling is stage-2 work (a render would hand the frame over in memory).
+    const auto p0 = Clock::now();
+    if (Status st = buffers.put(f, std::move(frame)); !st.ok()) return fail(st);
+    solve_seconds += seconds_since(p0);
     schedule.rendered(f);
     for (int r = schedule.ready(); r >= 0; r = schedule.ready()) {
       const auto s0 = Clock::now();
-      auto img = cache.reconstruct(r, [&](int p) -> const LayeredImage* {
-        auto it = buffers.find(p);
-        return it == buffers.end() ? nullptr : &it->second;
-      }, nullptr);
-      if (!img.ok()) {
-        std::fprintf(stderr, "%s\n", img.status().to_string().c_str());
-        return 1;
-      }
-      if (r + 1 < n) {  // the output's own dt layers, as finalize does
-        auto tg = temporal_gradients(buffers.at(r), buffers.at(r + 1), s);
-        if (!tg.ok()) return 1;
+      auto img = cache.reconstruct(r, buffers.reader(), nullptr);
+      if (!img.ok()) return fail(img.status());
+      if (r + 1 < n) {
+        // The output's own dt layers, as finalize does, by bands of rows so
+        // that spilled frames are never read whole (the synthetic motion is
+        // 0, so the bands' masks are those of the whole frame).
+        const FrameRegionReader reader = buffers.reader();
+        for (int y0 = 0; y0 < a.height; y0 += kOutputBandRows) {
+          const PixelRect band{0, y0, a.width, std::min(a.height, y0 + kOutputBandRows)};
+          auto cur = reader.read(r, band), next = reader.read(r + 1, band);
+          if (!cur.ok() || !next.ok()) return fail(cur.ok() ? next.status() : cur.status());
+          auto tg = temporal_gradients(**cur, **next, s);
+          if (!tg.ok()) return fail(tg.status());
+        }
       }
       solve_seconds += seconds_since(s0);
       cache.release_through(r);
@@ -369,10 +402,13 @@ int recon(const Args& a) {
     for (int d : schedule.releasable([&](int f) { return cache.buffers_needed(f, next_out); })) buffers.erase(d);
   }
   const double total = seconds_since(t0);
-  std::printf("stage 2 %s, %dx%d, shot %d frames, window %d (hop %d): %d windows, %.2f s per output frame "
-              "(stage 2 only; %.1f s total incl. %.1f s synthesising buffers), max buffered frames %d, peak RSS %.0f MiB\n",
-              a.method.c_str(), a.width, a.height, n, s.window, s.effective_hop(), cache.windows_solved(),
-              solve_seconds / emitted, total, gen_seconds, schedule.max_buffered(), peak_rss_mib());
+  auto grid = tile_grid_for(s.recon, a.width, a.height);
+  std::printf("stage 2 %s, %dx%d, shot %d frames, window %d (hop %d), %s: %d windows, %.2f s per output frame "
+              "(stage 2 only; %.1f s total incl. %.1f s synthesising buffers), max buffered frames %d (at most %d "
+              "spilled), peak RSS %.0f MiB\n",
+              a.method.c_str(), a.width, a.height, n, s.window, s.effective_hop(),
+              grid.ok() ? grid->to_string().c_str() : "?", cache.windows_solved(), solve_seconds / emitted, total,
+              gen_seconds, schedule.max_buffered(), buffers.most_spilled_frames(), peak_rss_mib());
   return 0;
 }
 
@@ -405,6 +441,10 @@ int main(int argc, char** argv) {
     else if (k == "--height") a.height = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 16384));
     else if (k == "--shot") a.shot = int(tools::int_option("gdvr-bench-tgpt", k, next(), 1, 100000));
     else if (k == "--method") a.method = next();
+    else if (k == "--tile-size") a.tile_size = int(tools::int_option("gdvr-bench-tgpt", k, next(), 0, 1 << 20));
+    else if (k == "--tile-halo") a.tile_halo = int(tools::int_option("gdvr-bench-tgpt", k, next(), 0, 1 << 20));
+    else if (k == "--memory-limit-mib") a.memory_limit_mib = tools::int_option("gdvr-bench-tgpt", k, next(), -1, 1 << 30);
+    else if (k == "--spill-dir") a.spill_dir = next();
     else if (k == "--ref-cache") a.ref_cache = next();
     else {
       std::fprintf(stderr, "unknown argument %s\n", k.c_str());

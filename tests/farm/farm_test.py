@@ -6,6 +6,11 @@
              byte for byte (pt and gpt); reruns change nothing; errors name
              the frame and path and exit non-zero. tgpt's temporal window
              reads neighbouring chunks' buffers.
+  tiles      tgpt's stage 2 by tiles: tile ranges finalized by different
+             worker processes, then one finalize assembling them, give the
+             frames of one worker and of gdvr-render byte for byte; a missing
+             tile part is named (exit 3); integrators without a window solve
+             are one tile whose task does nothing.
   kill       a worker killed with SIGKILL mid-frame leaves no visible partial
              file; the rerun renders only what is missing and the result is
              unchanged.
@@ -176,6 +181,60 @@ def localhost(args):
           .returncode == 2, "a chunk index past the end exits 2")
 
 
+# ---- tgpt's finalize by tiles ----
+
+def tiles(args):
+    farm, render = args.farm, args.render
+    work = fresh(args.work)
+    # 48x40 with 16-pixel tiles: a 3x3 grid whose halos cross every border.
+    job = write_job(args.source, work / "job.json", frames="0-5", width=48, height=40, spp=2,
+                    reconstruction={"method": "l2", "window": 4, "tile_size": 16})
+    ref = run([render, job, "--out", work / "ref", "--threads", "1"])
+    check(ref.returncode == 0, "tiles: gdvr-render single-process reference")
+    buffers, out, one = work / "buffers", work / "out", work / "one_worker"
+    rendered = [run([farm, "render", job, "--frames", chunk, "--buffers", buffers, "--threads", "1"])
+                for chunk in ("0-2", "3-5")]
+    check(all(r.returncode == 0 for r in rendered), "tiles: render stage")
+    listing = run([farm, "tiles", job, "--tiles-per-task=4"])  # --name=value, as the k8s manifests write flags
+    check(listing.returncode == 0 and listing.stdout.split() == ["0-3", "4-7", "8"],
+          "tiles: gdvr-farm tiles lists the 3x3 grid in tasks of 4 " + repr(listing.stdout.split()))
+    # One worker process per tile range, all at once; none writes a frame.
+    if not run_concurrently([[farm, "finalize", job, "--tiles", r, "--buffers", buffers, "--out", out]
+                             for r in listing.stdout.split()], "tiles: tiled finalize"):
+        return
+    check(not list(out.glob("frame_*.exr")) and len(list((out / "tiles").glob("solved_*.exr"))) == 6 * 9,
+          "tiles: tile tasks write one part per frame and tile, no frame")
+    again = run([farm, "finalize", job, "--tiles", "0-3", "--buffers", buffers, "--out", out])
+    check(again.returncode == 0 and "of 0 frame(s)" in again.stderr, "tiles: a rerun of a tile task skips its parts")
+    # A missing part is named; the assemble writes nothing for that frame.
+    part = out / "tiles/solved_0002_t0005.exr"
+    saved = part.read_bytes()
+    part.unlink()
+    gap = run([farm, "finalize", job, "--frames", "2", "--buffers", buffers, "--out", out])
+    check(gap.returncode == 3 and "tile(s) 5" in gap.stderr and not (out / "frame_0002.exr").exists(),
+          "tiles: assembling with a tile part missing exits 3 naming the tile")
+    part.write_bytes(saved)
+    fin = run([farm, "finalize", job, "--buffers", buffers, "--out", out, "--video"])
+    if not check(fin.returncode == 0 and fin.stderr.count("assembled from its tiles") == 6,
+                 "tiles: the last finalize assembles every frame from its tiles"):
+        print(fin.stderr)
+    single = run([farm, "finalize", job, "--buffers", buffers, "--out", one])
+    check(single.returncode == 0, "tiles: one-worker finalize")
+    for f in range(6):
+        name = f"frame_{f:04d}.exr"
+        check(same_bytes(out / name, one / name) and same_bytes(out / name, work / "ref" / name),
+              f"tiles: {name} assembled from tile tasks equals the one-worker finalize and gdvr-render byte for byte")
+    check(not list((out / "tiles").glob("*")), "tiles: the parts are removed once their frame is written")
+    check((out / "video.mp4").exists(), "tiles: video.mp4 written by the assembling finalize")
+    # Integrators without a window solve have one tile, whose task does nothing.
+    pt = write_job(args.source, work / "pt.json", frames="0-1", width=24, height=24, spp=1, integrator="pt")
+    listing = run([farm, "tiles", pt])
+    check(listing.returncode == 0 and listing.stdout.split() == ["0"], "tiles: a pt job is one tile")
+    noop = run([farm, "finalize", pt, "--tiles", "0", "--buffers", work / "pt_buffers", "--out", work / "pt_out"])
+    check(noop.returncode == 0 and "nothing to do" in noop.stderr and not (work / "pt_out/tiles").exists(),
+          "tiles: a pt job's tile task does nothing")
+
+
 # ---- a worker killed mid-frame ----
 
 def kill(args):
@@ -281,21 +340,27 @@ def k8s(args):
 import json, sys, yaml
 docs = [d for d in yaml.safe_load_all(open(sys.argv[1])) if d]
 cm = next(d for d in docs if d["kind"] == "ConfigMap")
-job = next(d for d in docs if d["kind"] == "Job" and d["spec"].get("completionMode") == "Indexed")
+job = next(d for d in docs if d["kind"] == "Job" and d["metadata"]["name"] == "gdvr-render-demo")
+tiles = next(d for d in docs if d["kind"] == "Job" and d["metadata"]["name"] == "gdvr-finalize-tiles-demo")
 cmd = job["spec"]["template"]["spec"]["containers"][0]["command"]
 size = next(a.split("=", 1)[1] for a in cmd if a.startswith("--chunk-size="))
 spec = json.loads(cm["data"]["job.json"])
 spec["scene"] = spec["scene"].replace("/srv/gdvr/assets/", sys.argv[2] + "/scenes/")
 json.dump(spec, open(sys.argv[3], "w"))
-print(job["spec"]["completions"], size)
+assert tiles["spec"]["completionMode"] == "Indexed"
+assert "--tiles=$(JOB_COMPLETION_INDEX)" in tiles["spec"]["template"]["spec"]["containers"][0]["command"]
+print(job["spec"]["completions"], size, tiles["spec"]["completions"])
 """
     local_job = args.work / "configmap_job.json"
     r = run([python, "-c", check_completions, args.source / "deploy/k8s/farm-job.yaml", args.source, local_job])
     if check(r.returncode == 0, "farm-job.yaml: read completions, chunk size and job file"):
-        completions, size = r.stdout.split()
+        completions, size, tile_completions = r.stdout.split()
         chunks = run([args.farm, "chunks", local_job, "--chunk-size", size])
         check(chunks.returncode == 0 and len(chunks.stdout.split()) == int(completions),
               f"Indexed Job completions ({completions}) = gdvr-farm chunks ({len(chunks.stdout.split())})")
+        tiles = run([args.farm, "tiles", local_job])
+        check(tiles.returncode == 0 and len(tiles.stdout.split()) == int(tile_completions),
+              f"tiles Job completions ({tile_completions}) = gdvr-farm tiles ({len(tiles.stdout.split())})")
     else:
         print(r.stderr)
 
@@ -335,12 +400,18 @@ def systemd(args):
 # ---- farm-manager templates, run by stand-ins for the managers ----
 
 def template_job(args, work):
-    """A 6-frame job, its single-process reference frames, and the folders."""
+    """A 6-frame job, its single-process reference frames, and the folders.
+    16-pixel tiles make its window solve 2x2 tiles (TEMPLATE_TILES), which
+    the templates' tile steps split between tasks."""
     work = fresh(work)
-    job = write_job(args.source, work / "job.json", frames="0-5", width=24, height=24, spp=2)
+    job = write_job(args.source, work / "job.json", frames="0-5", width=24, height=24, spp=2,
+                    reconstruction={"method": "l2", "window": 20, "tile_size": 16})
     ref = run([args.render, job, "--out", work / "ref", "--threads", "1"])
     check(ref.returncode == 0, "gdvr-render single-process reference")
     return work, job
+
+
+TEMPLATE_TILES = "0-3"  # gdvr-farm tiles of template_job's job
 
 
 def compare_to_reference(work, out, who):
@@ -348,6 +419,7 @@ def compare_to_reference(work, out, who):
         name = f"frame_{f:04d}.exr"
         check(same_bytes(out / name, work / "ref" / name), f"{who}: {name} equals the single-process frame")
     check((out / "video.mp4").exists(), f"{who}: video.mp4 written")
+    check(not list((out / "tiles").glob("*")), f"{who}: frames assembled from their tiles (no part left)")
 
 
 def run_concurrently(commands, who):
@@ -377,9 +449,11 @@ def openjd(args):
     check(r.returncode == 0, "openjd check gdvr-job.template.yaml")
     r = run([openjd_cli, "run", template, "--step", "Finalize", "--run-dependencies",
              "-p", f"JobFile={job}", "-p", "Frames=0-5", "-p", "ChunkSize=2", "-p", f"FarmDir={work / 'farm'}",
-             "-p", f"GdvrFarm={args.farm}", "-p", "Threads=1"])
+             "-p", f"GdvrFarm={args.farm}", "-p", "Threads=1", "-p", f"Tiles={TEMPLATE_TILES}", "-p", "TilesPerTask=2"])
     chunks = re.findall(r"Frame\(CHUNK\[INT\]\) = (\S+)", r.stdout + r.stderr)
     check(r.returncode == 0 and chunks == ["0-1", "2-3", "4-5"], f"openjd run: Render chunks {chunks} + Finalize")
+    tile_chunks = re.findall(r"Tile\(CHUNK\[INT\]\) = (\S+)", r.stdout + r.stderr)
+    check(tile_chunks == ["0-1", "2-3"], f"openjd run: FinalizeTiles chunks {tile_chunks}")
     if r.returncode:
         print(r.stdout[-3000:], r.stderr[-3000:])
     compare_to_reference(work, work / "farm/output", "OpenJD")
@@ -429,24 +503,26 @@ def opencue(args):
     env = dict(os.environ, PYTHONPATH=str(stub), GDVR_OUTLINE_DUMP=str(dump))
     r = run([sys.executable, args.source / "deploy/farm/opencue/gdvr_submit.py", job, "--frames", "0-5",
              "--chunk", "2", "--farm-dir", work / "farm", "--show", "test", "--shot", "farm", "--gdvr-farm",
-             args.farm, "--threads", "1"], env=env)
+             args.farm, "--threads", "1", "--tiles", TEMPLATE_TILES, "--tiles-per-task", "2"], env=env)
     if not check(r.returncode == 0 and dump.exists(), "gdvr_submit.py builds the outline"):
         print(r.stderr)
         return
     spec = json.loads(dump.read_text())
     layers = {l["name"]: l for l in spec["layers"]}
     check(spec["use_pycuerun"] is False, "launched without pycuerun (RQD substitutes the frame tokens)")
-    check(set(layers) == {"render", "finalize"} and layers["finalize"]["depends"] == ["render"],
-          "layers: render, then finalize depending on all of render")
-    render = layers["render"]["args"]
-    frames = list(range(0, 6))  # the layer's range "0-5"
+    check(set(layers) == {"render", "finalize_tiles", "finalize"} and layers["finalize_tiles"]["depends"] == ["render"]
+          and layers["finalize"]["depends"] == ["finalize_tiles"],
+          "layers: render, finalize_tiles depending on all of render, finalize depending on all tiles")
+    render, tiles = layers["render"]["args"], layers["finalize_tiles"]["args"]
     check(render["range"] == "0-5" and render["chunk"] == 2, "render layer: range 0-5, chunk 2")
-    commands = []
-    for i in range(0, len(frames), render["chunk"]):
-        chunk = frames[i:i + render["chunk"]]
-        commands.append([str(a).replace("#FRAME_START#", str(chunk[0])).replace("#FRAME_END#", str(chunk[-1]))
-                         for a in render["command"]])
-    if run_concurrently(commands, "OpenCue render chunks"):
+    check(tiles["range"] == TEMPLATE_TILES and tiles["chunk"] == 2, "finalize_tiles layer: the tiles, chunk 2")
+
+    def chunked(layer, indices):  # what Cuebot and RQD make of a layer's range
+        return [[str(a).replace("#FRAME_START#", str(indices[i])).replace(
+            "#FRAME_END#", str(indices[min(len(indices), i + layer["chunk"]) - 1])) for a in layer["command"]]
+            for i in range(0, len(indices), layer["chunk"])]
+    if run_concurrently(chunked(render, list(range(0, 6))), "OpenCue render chunks") and \
+            run_concurrently(chunked(tiles, list(range(0, 4))), "OpenCue finalize_tiles chunks"):
         run_concurrently([layers["finalize"]["args"]["command"]], "OpenCue finalize")
     compare_to_reference(work, work / "farm/output", "OpenCue")
 
@@ -505,25 +581,28 @@ def flamenco(args):
     harness = work / "harness.js"
     harness.write_text(FLAMENCO_HARNESS)
     settings = {"job_file": str(job), "frames": "0-5", "chunk_size": 2, "farm_dir": str(work / "farm"),
-                "gdvr_farm": str(args.farm), "threads": 1}
+                "gdvr_farm": str(args.farm), "threads": 1, "tiles": TEMPLATE_TILES, "tiles_per_task": 2}
     r = run([node, harness, args.source / "deploy/farm/flamenco/gdvr.js", json.dumps(settings)])
     if not check(r.returncode == 0, "gdvr.js compiles a job"):
         print(r.stderr)
         return
     tasks = json.loads(r.stdout)
     names = [t["name"] for t in tasks]
-    check(names == ["render-0-1", "render-2-3", "render-4-5", "finalize"], f"tasks {names}")
-    check(tasks[-1]["deps"] == names[:-1], "finalize depends on every render task")
+    check(names == ["render-0-1", "render-2-3", "render-4-5", "finalize-tiles-0-1", "finalize-tiles-2-3", "finalize"],
+          f"tasks {names}")
+    check(all(t["deps"] == names[:3] for t in tasks[3:5]), "each finalize-tiles task depends on every render task")
+    check(tasks[-1]["deps"] == names[3:5], "finalize depends on every finalize-tiles task")
     check(all(c["name"] == "exec" for t in tasks for c in t["commands"]), "every command is an exec command")
     exe = lambda c: [c["params"]["exe"]] + c["params"]["args"]
-    if run_concurrently([exe(c) for t in tasks[:-1] for c in t["commands"]], "Flamenco render tasks"):
+    if run_concurrently([exe(c) for t in tasks[:3] for c in t["commands"]], "Flamenco render tasks") and \
+            run_concurrently([exe(c) for t in tasks[3:5] for c in t["commands"]], "Flamenco finalize-tiles tasks"):
         run_concurrently([exe(c) for c in tasks[-1]["commands"]], "Flamenco finalize")
     compare_to_reference(work, work / "farm/output", "Flamenco")
 
 
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("test", choices=["localhost", "kill", "k8s", "systemd", "openjd", "opencue", "flamenco"])
+    p.add_argument("test", choices=["localhost", "tiles", "kill", "k8s", "systemd", "openjd", "opencue", "flamenco"])
     p.add_argument("--source", type=Path, required=True)
     p.add_argument("--work", type=Path, required=True)
     p.add_argument("--farm", type=Path)
@@ -531,7 +610,7 @@ def main():
     p.add_argument("--server")
     args = p.parse_args()
     args.work.mkdir(parents=True, exist_ok=True)
-    {"localhost": localhost, "kill": kill, "k8s": k8s, "systemd": systemd, "openjd": openjd, "opencue": opencue,
+    {"localhost": localhost, "tiles": tiles, "kill": kill, "k8s": k8s, "systemd": systemd, "openjd": openjd, "opencue": opencue,
      "flamenco": flamenco}[args.test](args)
     if FAILURES:
         print(f"{len(FAILURES)} check(s) failed", file=sys.stderr)

@@ -9,6 +9,7 @@ namespace gdvr {
 ReconSettings job_recon_settings(const ReconstructionSpec& spec, ReconSettings base) {
   base.method = spec.method;
   base.alpha = spec.alpha;
+  base.tile_size = spec.tile_size;
   if (spec.term_weights.size() == size_t(kTermCount))
     for (int t = 0; t < kTermCount; ++t) base.term_weights[size_t(t)] = spec.term_weights[size_t(t)];
   return base;

@@ -18,6 +18,7 @@
 #include "core/job/frame_output.h"
 #include "core/job/frame_time_budget.h"
 #include "core/job/job_spec.h"
+#include "core/recon/tile_grid.h"
 #include "core/render/frame_scene.h"
 #include "core/render/pt_integrator.h"
 #include "core/scene/scene.h"
@@ -66,6 +67,30 @@ class IntegratorRunner {
   // it until measured (core/job/frame_time_budget.h). pt and gpt finalize
   // each frame right after rendering it, so the budget measures theirs at once.
   virtual double finalize_seconds_prior(const FrameRenderSettings& /*settings*/, int /*frames*/) const { return 0; }
+  // Whether finalize reads FrameBuffers::spilled (run_job's memory limit).
+  virtual bool reads_spilled_buffers() const { return false; }
+
+  // ---- Stage 2 by tiles (a farm's tiled finalize, docs/farm.md) ----
+  // Only integrators with a window solve split it; the others refuse.
+  // The tile grid of the reconstruction for frames of width × height.
+  virtual Expected<TileGrid> tile_grid(int /*width*/, int /*height*/) const { return no_tiled_finalize(); }
+  // The reconstructed image of `frame` before the direct light, with only the
+  // cores of `tiles` solved (0 elsewhere); `buffers` as for finalize.
+  virtual Expected<Image> reconstruct_tiles(int /*frame*/, const std::vector<int>& /*tiles*/,
+                                            const std::map<int, FrameBuffers>& /*buffers*/) {
+    return no_tiled_finalize();
+  }
+  // finalize with the reconstructed image given (every tile's part pasted
+  // together); `buffers` need only hold the frame and the next one.
+  virtual Expected<FrameOutput> finalize_solved(int /*frame*/, const std::map<int, FrameBuffers>& /*buffers*/,
+                                                Image /*solved*/) {
+    return no_tiled_finalize();
+  }
+
+ protected:
+  static Status no_tiled_finalize() {
+    return unimplemented("this integrator's finalize does not split into tiles (only tgpt's does)");
+  }
 };
 
 // The job's integrator, its settings built from the job and checked (errors

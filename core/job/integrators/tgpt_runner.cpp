@@ -154,6 +154,35 @@ double prior_seconds_per_pixel_frame(ReconMethod method) {
   }
 }
 
+// The buffers a finalize is given, a region at a time: frames held in memory
+// are lent or cropped, frames run_job spilled are read from their file.
+FrameRegionReader region_reader(const std::map<int, FrameBuffers>& buffers) {
+  int width = 0, height = 0;
+  for (const auto& [f, fb] : buffers) {
+    if (fb.spilled) {
+      width = fb.spilled->width();
+      height = fb.spilled->height();
+    } else if (!fb.layers.layers.empty()) {
+      width = fb.layers.layers.front().image.width();
+      height = fb.layers.layers.front().image.height();
+    }
+    if (width > 0) break;
+  }
+  FrameRegionReader r = in_memory_region_reader(width, height, [&buffers](int f) -> const LayeredImage* {
+    auto it = buffers.find(f);
+    return it == buffers.end() || it->second.spilled ? nullptr : &it->second.layers;
+  });
+  r.read = [&buffers, in_memory = std::move(r.read)](int f, const PixelRect& rect)
+      -> Expected<std::shared_ptr<const LayeredImage>> {
+    auto it = buffers.find(f);
+    if (it == buffers.end() || !it->second.spilled) return in_memory(f, rect);
+    auto region = it->second.spilled->read(rect);
+    if (!region.ok()) return region.status().with_context("frame " + std::to_string(f) + ": ");
+    return std::shared_ptr<const LayeredImage>(std::make_shared<LayeredImage>(std::move(region.value())));
+  };
+  return r;
+}
+
 }  // namespace
 
 double TgptRunner::finalize_seconds_prior(const FrameRenderSettings& settings, int /*frames*/) const {
@@ -177,47 +206,79 @@ void TgptRunner::calibrate_window_solve(const LayeredImage& layers, FrameTimeBud
 }
 
 Expected<FrameOutput> TgptRunner::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {
-  auto out = finalize_output(frame, buffers);
+  windows_.solve_only_tiles({});
+  auto out = finalize_output(frame, buffers, nullptr);
   // Frames come out in increasing order (a later one, out of order, solves
   // again what it needs): windows ending here are done with.
   if (out.ok()) windows_.release_through(frame);
   return out;
 }
 
-Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int, FrameBuffers>& buffers) {
+Expected<Image> TgptRunner::reconstruct_tiles(int frame, const std::vector<int>& tiles,
+                                              const std::map<int, FrameBuffers>& buffers) {
+  if (tiles.empty()) return invalid_argument("finalize: no tiles given");
+  windows_.solve_only_tiles(tiles);
+  auto solved = windows_.reconstruct(frame, region_reader(buffers), nullptr);
+  if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+  windows_.release_through(frame);
+  return solved;
+}
+
+Expected<FrameOutput> TgptRunner::finalize_solved(int frame, const std::map<int, FrameBuffers>& buffers, Image solved) {
+  return finalize_output(frame, buffers, &solved);
+}
+
+Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int, FrameBuffers>& buffers,
+                                                  Image* solved_elsewhere) {
   const std::vector<int>& frames = windows_.frames();
   const int pos = windows_.position(frame);
   if (pos < 0) return invalid_argument("frame " + std::to_string(frame) + " is not in the job's frame range");
   const int n = int(frames.size());
-  auto layers_of = [&](int f) -> const LayeredImage* {
-    auto it = buffers.find(f);
-    return it == buffers.end() ? nullptr : &it->second.layers;
-  };
-  // The frame and its successor must be here; the windows' other frames only
-  // while their window is not solved yet (the cache reports what is missing).
-  for (int p : {pos, pos + 1})
-    if (p < n && !layers_of(frames[size_t(p)]))
+  const FrameRegionReader reader = region_reader(buffers);
+  // The frame and its successor must be here, whole; the windows' other
+  // frames only while their window is not solved yet (the cache reports what
+  // is missing), and only a tile's region at a time.
+  std::shared_ptr<const LayeredImage> held[2];
+  for (int k : {0, 1}) {
+    if (pos + k >= n) continue;
+    const int f = frames[size_t(pos + k)];
+    auto whole = reader.read(f, PixelRect::whole(reader.width, reader.height));
+    if (!whole.ok()) return whole.status();
+    if (!whole.value())
       return failed_precondition("finalize: frame " + std::to_string(frame) + " needs the buffers of frame " +
-                                 std::to_string(frames[size_t(p)]));
-  const FrameBuffers& fb = buffers.at(frame);
-  const ImageLayer* direct = fb.layers.find("direct");
+                                 std::to_string(f));
+    held[k] = std::move(whole.value());
+  }
+  const LayeredImage& layers = *held[0];
+  const ImageLayer* direct = layers.find("direct");
   if (!direct) return invalid_argument("finalize: frame buffers lack the 'direct' layer");
 
   ReconStats recon_stats;
-  auto solved = windows_.reconstruct(frame, layers_of, &recon_stats);
-  if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
-  Image final_image = std::move(solved.value());
+  Image final_image;
+  if (solved_elsewhere) {
+    if (solved_elsewhere->width() != direct->image.width() || solved_elsewhere->height() != direct->image.height() ||
+        solved_elsewhere->channels() != direct->image.channels())
+      return invalid_argument("finalize: frame " + std::to_string(frame) + ": the solved image is " +
+                              std::to_string(solved_elsewhere->width()) + "x" + std::to_string(solved_elsewhere->height()) +
+                              ", its buffers are " + std::to_string(direct->image.width()) + "x" +
+                              std::to_string(direct->image.height()));
+    final_image = std::move(*solved_elsewhere);
+  } else {
+    auto solved = windows_.reconstruct(frame, reader, &recon_stats);
+    if (!solved.ok()) return solved.status().with_context("frame " + std::to_string(frame) + ": reconstruction: ");
+    final_image = std::move(solved.value());
+  }
   const int64_t bad_direct = add_direct_clamped(direct->image, clamp_negative_, &final_image);
 
   FrameOutput out;
   out.frame = frame;
-  out.stats = fb.stats;
+  out.stats = buffers.at(frame).stats;
   out.stats.reconstruct_seconds = recon_stats.seconds;
   if (bad_direct > 0)
     out.stats.left_out.push_back(std::to_string(bad_direct) + " non-finite direct-light values dropped");
   out.image.add("", {"R", "G", "B"}, std::move(final_image));
   auto add_estimate = [&](const char* name) -> Status {
-    auto est = tgpt_frame_estimate(fb.layers, name);
+    auto est = tgpt_frame_estimate(layers, name);
     if (!est.ok()) return est.status();
     out.image.add(name, {"R", "G", "B"}, std::move(est.value()));
     return Status::Ok();
@@ -227,16 +288,16 @@ Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int,
     for (const char* name : {"primal", "dx", "dy"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
     out.image.layers.push_back(*direct);
     for (const char* name : {"primal_var", "dx_var", "dy_var"}) GDVR_RETURN_IF_ERROR(add_estimate(name));
-    if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
-    copy_feature_layers(fb.layers, &out.image);
+    if (const ImageLayer* l = layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
+    copy_feature_layers(layers, &out.image);
     out.stats.left_out.push_back("temporal gradients and buffers: single-frame job");
     zero_non_finite_layers(&out);
     return out;
   }
   // The frame's own temporal layers (towards the next frame of the job).
   TemporalGradients tg;
-  if (const LayeredImage* next = pos + 1 < n ? layers_of(frames[size_t(pos) + 1]) : nullptr) {
-    auto g = temporal_gradients(fb.layers, *next, settings_);
+  if (const LayeredImage* next = held[1].get()) {
+    auto g = temporal_gradients(layers, *next, settings_);
     if (!g.ok()) return g.status().with_context("frame " + std::to_string(frame) + ": ");
     tg = std::move(g.value());
   } else {
@@ -253,11 +314,11 @@ Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int,
   out.image.add("dt_var", {"R", "G", "B"}, std::move(tg.dt_var));
   out.image.add("dxdt_var", {"R", "G", "B"}, std::move(tg.dxdt_var));
   out.image.add("dydt_var", {"R", "G", "B"}, std::move(tg.dydt_var));
-  if (const ImageLayer* l = fb.layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
+  if (const ImageLayer* l = layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
   out.image.add("temporal_failure_rate", {"Y"}, std::move(tg.failure_rate));
-  if (const ImageLayer* l = fb.layers.find("motion")) out.image.layers.push_back(*l);
+  if (const ImageLayer* l = layers.find("motion")) out.image.layers.push_back(*l);
   else out.image.add("motion", {"X", "Y", "V"}, Image(direct->image.width(), direct->image.height(), 3));
-  copy_feature_layers(fb.layers, &out.image);
+  copy_feature_layers(layers, &out.image);
   if (settings_.window == 1)
     out.stats.left_out.push_back("temporal terms in the solve: window of 1 frame (spatial reconstruction)");
   if (!settings_.motion_vectors) out.stats.left_out.push_back("temporal masks: motion vectors off");

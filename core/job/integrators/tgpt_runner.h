@@ -27,10 +27,16 @@ class TgptRunner final : public IntegratorRunner {
   bool buffers_needed(int frame, int next_out) const override { return windows_.buffers_needed(frame, next_out); }
   int windows_solved() const override { return windows_.windows_solved(); }
   double finalize_seconds_prior(const FrameRenderSettings& settings, int frames) const override;
+  bool reads_spilled_buffers() const override { return true; }
+  Expected<TileGrid> tile_grid(int width, int height) const override { return windows_.tile_grid(width, height); }
+  Expected<Image> reconstruct_tiles(int frame, const std::vector<int>& tiles,
+                                    const std::map<int, FrameBuffers>& buffers) override;
+  Expected<FrameOutput> finalize_solved(int frame, const std::map<int, FrameBuffers>& buffers, Image solved) override;
 
  private:
   TgptRunner(TgptSettings settings, bool clamp_negative, std::vector<int> job_frames);
-  Expected<FrameOutput> finalize_output(int frame, const std::map<int, FrameBuffers>& buffers);
+  // `solved`: the reconstructed image when given (tiles solved elsewhere), else solved here.
+  Expected<FrameOutput> finalize_output(int frame, const std::map<int, FrameBuffers>& buffers, Image* solved);
   // Window frames solved per frame of the shot: each frame lies in about
   // W/H windows (2 at the default overlap), fewer near the shot's ends.
   double window_frames_per_frame() const;

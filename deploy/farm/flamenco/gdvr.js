@@ -1,7 +1,9 @@
 // Flamenco 3 job type for gdvr: copy into the Manager's scripts/ folder
 // (beside flamenco-manager) and restart it; "gdvr" then appears as a job type.
-// One render task per chunk of frames, then one finalize task that depends
-// on all of them (reconstruction, previews, video).
+// One render task per chunk of frames, one finalize-tiles task per chunk of
+// tiles of the T-GPT window solve (each depends on every render task), then
+// one finalize task that depends on all tile tasks and assembles the frames
+// (previews, video). Tiles: `gdvr-farm tiles JOB.json --tiles-per-task 100000`.
 //
 // Workers run the commands through the "exec" command, so gdvr-farm must be
 // on their PATH (or set gdvr_farm), and the job file, scene and farm_dir on
@@ -28,6 +30,10 @@ const JOB_TYPE = {
       description: "Frames per render task" },
     { key: "farm_dir", type: "string", subtype: "dir_path", required: true,
       description: "Shared folder: buffers/ (per-frame sample buffers) and output/ (final frames, previews, video)" },
+    { key: "tiles", type: "string", default: "0",
+      description: "Tile indices of the window solve, e.g. 0-11 (gdvr-farm tiles JOB.json)" },
+    { key: "tiles_per_task", type: "int32", default: 4, propargs: { min: 1 },
+      description: "Tiles per finalize-tiles task" },
     { key: "threads", type: "int32", default: 0, propargs: { min: 0 },
       description: "Render threads per task; 0 = all cores" },
     { key: "gdvr_farm", type: "string", default: "gdvr-farm", visible: "submission",
@@ -50,11 +56,23 @@ function compileJob(job) {
     renderTasks.push(task);
   }
 
+  const tileTasks = [];
+  for (const tiles of frameChunker(settings.tiles, settings.tiles_per_task)) {
+    const task = author.Task(`finalize-tiles-${tiles}`, TASK_TYPE);
+    task.addCommand(author.Command("exec", {
+      exe: settings.gdvr_farm,
+      args: ["finalize", settings.job_file, "--tiles", tiles, "--buffers", buffers, "--out", output],
+    }));
+    for (const render of renderTasks) task.addDependency(render);
+    job.addTask(task);
+    tileTasks.push(task);
+  }
+
   const finalize = author.Task("finalize", TASK_TYPE);
   finalize.addCommand(author.Command("exec", {
     exe: settings.gdvr_farm,
     args: ["finalize", settings.job_file, "--buffers", buffers, "--out", output, "--video"],
   }));
-  for (const task of renderTasks) finalize.addDependency(task);
+  for (const task of tileTasks) finalize.addDependency(task);
   job.addTask(finalize);
 }

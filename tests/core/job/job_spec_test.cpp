@@ -77,7 +77,8 @@ TEST(JobSpecTest, ParsesEveryField) {
   auto job = parse_job_json(R"({
     "scene": "cbox/cbox-rgb.xml", "frames": "1-10x2", "fps": 30, "width": 320, "height": 240, "spp": 16,
     "time_budget_s": 2.5, "seed": "18446744073709551615", "integrator": "gpt", "shift": "hybrid",
-    "reconstruction": {"method": "l2", "alpha": 0.5, "window": 5, "term_weights": [1, 1, 1, 2, 0.5, 0.5]},
+    "reconstruction": {"method": "l2", "alpha": 0.5, "window": 5, "tile_size": 300,
+                       "term_weights": [1, 1, 1, 2, 0.5, 0.5]},
     "params": {"spp": "8", "res": 64},
     "tracks": [{"target": "sensor", "interpolation": "cubic", "keys": [
       {"frame": 0, "lookat": {"origin": [0, 0, -5], "target": [0, 0, 0], "up": [0, 1, 0]}},
@@ -94,6 +95,8 @@ TEST(JobSpecTest, ParsesEveryField) {
   EXPECT_EQ(job->shift, ShiftMapping::kHybrid);
   EXPECT_EQ(job->reconstruction.method, ReconMethod::kL2);
   EXPECT_EQ(job->reconstruction.window, 5);
+  EXPECT_EQ(job->reconstruction.tile_size, 300);
+  EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->reconstruction.tile_size, 300);
   EXPECT_EQ(job->reconstruction.term_weights, (std::vector<double>{1, 1, 1, 2, 0.5, 0.5}));
   EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->reconstruction.term_weights, job->reconstruction.term_weights);
   EXPECT_EQ(job->params.at("res"), "64");
@@ -135,6 +138,7 @@ TEST(JobSpecTest, DefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(job->reconstruction.window, 20);
   EXPECT_EQ(job->reconstruction.alpha, ReconSettings().alpha);
   EXPECT_EQ(job->reconstruction.window, TgptSettings().window);
+  EXPECT_EQ(job->reconstruction.tile_size, ReconSettings().tile_size);
   const std::string text = job_to_json(*job);
   for (const char* field : {R"("integrator": "pt")", R"("shift": "reconnect")", R"("temporal_shift": "replay")",
                             R"("method": "l1")"})
@@ -211,6 +215,9 @@ TEST(JobSpecTest, ValidateNamesTheField) {
   bad = job;
   bad.reconstruction.window = 0;
   expect_field(bad, "job.reconstruction.window");
+  bad = job;
+  bad.reconstruction.tile_size = 8;
+  expect_field(bad, "job.reconstruction.tile_size");
   bad = job;
   bad.reconstruction.alpha = -1;
   expect_field(bad, "job.reconstruction.alpha");

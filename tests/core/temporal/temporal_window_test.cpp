@@ -47,7 +47,7 @@ LayeredImage tagged_buffers(int f, int n) {
 }
 
 // The window's own primals: the blend of exact solutions must give each frame back.
-Expected<ReconResult> identity_solve(const GradientWindow& w) {
+Expected<ReconResult> identity_solve(const GradientWindow& w, const PixelRect&) {
   ReconResult r;
   for (const auto& f : w.frames) r.frames.push_back(f->buffer(Term::kPrimal));
   return r;
@@ -106,11 +106,11 @@ TEST(TemporalWindowCacheTest, SolverErrorsReachTheCaller) {
   std::map<int, LayeredImage> held = {{0, tagged_buffers(0, 2)}, {1, tagged_buffers(1, 2)}};
   auto layers = [&](int k) { return &held.at(k); };
   TemporalWindowCache failing(settings, {0, 1},
-                              [](const GradientWindow&) -> Expected<ReconResult> { return internal_error("boom"); });
+                              [](const GradientWindow&, const PixelRect&) -> Expected<ReconResult> { return internal_error("boom"); });
   auto st = failing.reconstruct(0, layers, nullptr);
   ASSERT_FALSE(st.ok());
   EXPECT_NE(st.status().message().find("boom"), std::string::npos);
-  TemporalWindowCache short_answer(settings, {0, 1}, [](const GradientWindow&) -> Expected<ReconResult> {
+  TemporalWindowCache short_answer(settings, {0, 1}, [](const GradientWindow&, const PixelRect&) -> Expected<ReconResult> {
     return ReconResult{};  // no frames for a window of two
   });
   EXPECT_EQ(short_answer.reconstruct(0, layers, nullptr).status().code(), StatusCode::kInternal);

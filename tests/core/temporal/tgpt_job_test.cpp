@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 
+#include "core/image/error_metrics.h"
 #include "core/job/job_runner.h"
 #include "core/recon/reconstruct.h"
 #include "core/temporal/temporal_buffers.h"
@@ -44,10 +45,13 @@ JobSpec tgpt_job(const std::string& temporal_shift, const std::string& frames, b
   return job;
 }
 
-std::vector<FrameOutput> run(const JobSpec& job) {
+// memory_limit_bytes >= 0: run_job spills its buffered frames beyond it.
+std::vector<FrameOutput> run(const JobSpec& job, long long memory_limit_bytes = -1) {
   JobRunOptions options;
   options.base_dir = demo_dir();
   options.threads = 2;
+  options.memory_limit_bytes = memory_limit_bytes;
+  options.spill_dir = ::testing::TempDir();
   std::vector<FrameOutput> out;
   JobCallbacks cb;
   cb.on_frame_final = [&](const FrameOutput& f) { out.push_back(f); };
@@ -234,6 +238,34 @@ TEST_P(TgptJobTest, SingleFrameJobHasNoTemporalBuffers) {
 
 // Frames come out in order, each as soon as its windows are rendered, and a
 // stand-alone finalize of each frame (a farm's stage 2) gives the same image.
+TEST_P(TgptJobTest, SpilledBuffersAndTilesGiveTheFramesOfMemory) {
+  // 32x32 frames in 16-pixel tiles (2x2): each window solved by tiles; every
+  // buffered frame spilled to disk (memory limit 0) must change nothing.
+  JobSpec job = tgpt_job(GetParam(), "0-6", true, 4);
+  job.width = job.height = 32;
+  job.reconstruction.tile_size = 16;
+  const std::vector<FrameOutput> in_memory = run(job);
+  const std::vector<FrameOutput> spilled = run(job, /* memory_limit_bytes = */ 0);
+  ASSERT_EQ(in_memory.size(), 7u);
+  ASSERT_EQ(spilled.size(), 7u);
+  for (size_t i = 0; i < 7; ++i) {
+    ASSERT_EQ(spilled[i].image.layers.size(), in_memory[i].image.layers.size());
+    for (size_t l = 0; l < in_memory[i].image.layers.size(); ++l)
+      EXPECT_EQ(spilled[i].image.layers[l].image.data(), in_memory[i].image.layers[l].image.data())
+          << "frame " << i << " layer " << in_memory[i].image.layers[l].name;
+    expect_finite_layers(spilled[i]);
+  }
+  // And the tiles agree with the whole-frame windows.
+  job.reconstruction.tile_size = 0;
+  const std::vector<FrameOutput> whole = run(job);
+  ASSERT_EQ(whole.size(), 7u);
+  for (size_t i = 0; i < 7; ++i) {
+    auto e = rel_mse_sums(in_memory[i].image.find("")->image, whole[i].image.find("")->image);
+    ASSERT_TRUE(e.ok());
+    EXPECT_LE(e->global(), 1e-6) << "frame " << i;
+  }
+}
+
 TEST_P(TgptJobTest, StreamsInOrderAndStagesAgree) {
   JobSpec job = tgpt_job(GetParam(), "0-6", true, 4);
   JobRunOptions options;
