@@ -55,6 +55,10 @@ std::string server_usage() {
   --tls-cert=PEM --tls-key=PEM [--tls-ca=PEM]   TLS; with a CA, clients need certificates
   --shutdown-grace-s=S      deadline for in-flight calls on SIGTERM (default 10)
   --keepalive-time-s=S      ping interval for quiet connections (default 30)
+  --memory-limit-mib=N      buffered T-GPT frames beyond N MiB (all running jobs
+                            together) go to files and are read back by tiles
+                            (default: no limit)
+  --spill-dir=DIR           where those files go (default: the system's temporary folder)
 )";
 }
 
@@ -118,6 +122,8 @@ Expected<ServerConfig> parse_server_flags(int argc, char** argv) {
     else if (flag == "max-queue") { GDVR_RETURN_IF_ERROR(as_int(1, 1 << 24)); c.limits.max_queue = size_t(n); }
     else if (flag == "shutdown-grace-s") { GDVR_RETURN_IF_ERROR(as_int(0, 3600)); c.shutdown_grace_s = double(n); }
     else if (flag == "keepalive-time-s") { GDVR_RETURN_IF_ERROR(as_int(1, 3600)); c.keepalive_time_s = int(n); }
+    else if (flag == "memory-limit-mib") { GDVR_RETURN_IF_ERROR(as_int(0, 1ll << 30)); c.memory_limit_bytes = n << 20; }
+    else if (flag == "spill-dir") c.spill_dir = value;
     else return invalid_argument("unknown flag --" + flag + " (see --help)");
   }
   if (!token_file.empty()) {

@@ -59,6 +59,12 @@ struct ServerConfig {
   std::string tls_cert, tls_key, tls_ca;   // TLS when cert+key; mTLS when also CA
   double shutdown_grace_s = 10;            // Shutdown() deadline on SIGTERM
   int keepalive_time_s = 30;               // server pings idle streams this often
+  // Buffered T-GPT frames beyond this many bytes (all running jobs together,
+  // split evenly between them) go to unnamed files in spill_dir (empty: the
+  // system's temporary folder) and the window solve reads them by tiles
+  // (docs/tgpt.md, "Memory"). < 0: no limit.
+  long long memory_limit_bytes = -1;
+  std::string spill_dir;
 };
 
 // Parses argv; `--help` yields a kFailedPrecondition status carrying the usage.

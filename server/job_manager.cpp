@@ -444,6 +444,9 @@ void JobManager::run(Job* job) {
   opts.base_dir = job->scene_root;
   opts.asset_root = job->scene_root;
   opts.skip_frames = job->skipped;  // only this thread changes skipped while RUNNING
+  // The memory limit covers every running job: each gets its share.
+  if (config_.memory_limit_bytes >= 0) opts.memory_limit_bytes = config_.memory_limit_bytes / config_.concurrency;
+  opts.spill_dir = config_.spill_dir;
   std::string dir = job_dir(job->id);
   std::error_code ec;
   fs::create_directories(dir, ec);

@@ -613,6 +613,32 @@ TEST(ServiceConcurrency, TwoJobsThreeWatchersEach) {
 
 // ---- TLS with a bearer token ----
 
+// A memory limit makes a T-GPT job spill its buffered frames to unnamed files
+// and read them back by tiles: the streamed frames are the in-memory run's, and
+// nothing is left in the spill folder.
+TEST(ServiceMemoryLimit, SpilledTgptFramesEqualRunJob) {
+  TestDir dir;
+  const std::string spill = dir.path() + "/spill";
+  fs::create_directories(spill);
+  ServerProcess server(dir, {"--memory-limit-mib=0", "--spill-dir=" + spill});
+  ASSERT_TRUE(server.start()) << "server did not start; log: " << server.log_path();
+  const std::string job = R"({"scene": "cbox/cbox-rgb.xml", "frames": "1-3", "width": 32, "height": 32, "spp": 2,
+                              "seed": 7, "integrator": "tgpt",
+                              "reconstruction": {"method": "l2", "window": 3, "tile_size": 16}})";
+  auto stub = server.stub();
+  v1::SubmitJobResponse resp;
+  ASSERT_TRUE(submit(stub.get(), "spill", job, &resp).ok());
+  Watched w = watch(stub.get(), resp.job_id(), -1, 0);
+  ASSERT_TRUE(w.status.ok()) << w.status.error_message();
+  EXPECT_EQ(w.terminal, "completed");
+  auto ref = reference(job, dir);
+  for (int f : {1, 2, 3}) {
+    ASSERT_TRUE(w.exr.count(f)) << "frame " << f;
+    expect_same(decode(w.exr[f], dir.path() + "/got.exr"), ref[f], f);
+  }
+  EXPECT_TRUE(fs::is_empty(spill));
+}
+
 TEST(ServiceTls, SelfSignedCertAndToken) {
   // deploy/install-deps.sh installs the openssl CLI; without it this test fails, never skips.
   ASSERT_EQ(std::system("command -v openssl >/dev/null 2>&1"), 0) << "the openssl CLI is not installed";
