@@ -1,5 +1,7 @@
 #include "core/recon/pcg.h"
 
+#include "core/recon/poisson_kernels.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -69,6 +71,7 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
   double rr = rr0.first;
   const double tol2 = tolerance * tolerance * b_norm2;
 
+  const PoissonKernels& kernels = poisson_kernels();
   PcgResult res;
   while (res.iterations < max_iterations && rr > tol2) {
     const double pq = A.apply(p, q);
@@ -78,27 +81,8 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
     // ---- r −= step q, with r·r and r·M·r ----
     // x += step p is deferred to the p pass below, which reads p anyway.
     const Pair upd = reduce_pair(n, [&](size_t i0, size_t i1) {
-      // kLanes independent partial sums: float sums may not be reassociated,
-      // so a single accumulator would keep this hot loop scalar.
-      constexpr int kLanes = 8;
-      float rr_acc[kLanes] = {}, rz_acc[kLanes] = {};
-      size_t i = i0;
-      for (; i + kLanes <= i1; i += kLanes)
-        for (int j = 0; j < kLanes; ++j) {
-          const float ri = r[i + j] - step * q[i + j];
-          r[i + j] = ri;
-          rr_acc[j] += ri * ri;
-          rz_acc[j] += ri * ri * M[i + j];
-        }
-      for (; i < i1; ++i) {
-        const float ri = r[i] - step * q[i];
-        r[i] = ri;
-        rr_acc[0] += ri * ri;
-        rz_acc[0] += ri * ri * M[i];
-      }
-      float rr_sum = 0, rz_sum = 0;
-      for (int j = 0; j < kLanes; ++j) rr_sum += rr_acc[j], rz_sum += rz_acc[j];
-      return std::pair<float, float>{rr_sum, rz_sum};
+      const PcgSums sums = kernels.update_residual(r, q, M, step, i0, i1);
+      return std::pair<float, float>{sums.first, sums.second};
     });
     ++res.iterations;
     rr = upd.first;
@@ -108,14 +92,7 @@ PcgResult solve_pcg(const PoissonSystem& A, const Field& b, const Field& inv_dia
     const float beta = last ? 0.0f : float(rz_new / rz);
     rz = rz_new;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kChunk), [&](const tbb::blocked_range<size_t>& rg) {
-      if (last) {
-        for (size_t i = rg.begin(); i != rg.end(); ++i) x[i] += step * p[i];
-        return;
-      }
-      for (size_t i = rg.begin(); i != rg.end(); ++i) {
-        x[i] += step * p[i];
-        p[i] = M[i] * r[i] + beta * p[i];
-      }
+      kernels.update_solution(x, p, r, M, step, beta, last, rg.begin(), rg.end());
     });
     if (last) break;
   }

@@ -1,7 +1,8 @@
 // Jacobi-preconditioned conjugate gradients on a PoissonSystem, hand-written
 // over float arrays so that the vector updates are fused into two parallel
 // passes per iteration (r and the dots; x and p) and the dot products are reduced in double
-// (deterministically, so results do not depend on the thread count).
+// (deterministically, so results do not depend on the thread count). The
+// passes run on the CPU's fastest kernels (core/recon/poisson_kernels.h).
 #pragma once
 
 #include "core/recon/poisson_operator.h"

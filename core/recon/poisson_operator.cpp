@@ -1,5 +1,7 @@
 #include "core/recon/poisson_operator.h"
 
+#include "core/recon/poisson_kernels.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -18,179 +20,9 @@ constexpr int kChunkPixels = 16384;
 // frames t ± 1 that the temporal stencil reads are still in cache when they
 // become the centre frame (frame-major order streamed p three times from DRAM).
 constexpr int kBlockRows = 16;
-// Mask mode checks for constant weights per span of kSpan columns, so one
-// dropped sample only slows its own span.
-constexpr int kSpan = 64;
-int span_count(int width) { return (width + kSpan - 1) / kSpan; }
-
-// Per-constraint float weights: one row pointer per (term, neighbouring row)
-// the stencil touches. `_u` is line y − 1, `_p` frame t − 1.
-struct FloatWeights {
-  const float *wp, *wdx, *wdy, *wdy_u;
-  const float *wdt, *wdt_p;
-  const float *wdxdt, *wdxdt_p;
-  const float *wdydt, *wdydt_u, *wdydt_p, *wdydt_pu;
-
-  float p(int i) const { return wp[i]; }
-  float dx(int i) const { return wdx[i]; }
-  float dy(int i) const { return wdy[i]; }
-  float dy_u(int i) const { return wdy_u[i]; }
-  float dt(int i) const { return wdt[i]; }
-  float dt_p(int i) const { return wdt_p[i]; }
-  float dxdt(int i) const { return wdxdt[i]; }
-  float dxdt_p(int i) const { return wdxdt_p[i]; }
-  float dydt(int i) const { return wdydt[i]; }
-  float dydt_u(int i) const { return wdydt_u[i]; }
-  float dydt_p(int i) const { return wdydt_p[i]; }
-  float dydt_pu(int i) const { return wdydt_pu[i]; }
-};
-
-// Constant per-term weights on packed validity bits: four mask rows replace
-// twelve float weight rows (1–2 streamed bytes per pixel instead of ~36).
-// w·1.0f and w·0.0f are exact, so this gives bit-identical results to
-// FloatWeights filled with the same constants.
-struct MaskWeights {
-  const uint8_t *m, *m_u, *m_p, *m_pu;  // lines (t, y), (t, y−1), (t−1, y), (t−1, y−1)
-  float w[kTermCount];
-  float wp_dropped;
-
-  template <Term kT>
-  float on(const uint8_t* row, int i) const {
-    return w[term_index(kT)] * float((row[i] >> term_index(kT)) & 1);
-  }
-  float p(int i) const { return (m[i] & 1) ? w[0] : wp_dropped; }
-  float dx(int i) const { return on<Term::kDx>(m, i); }
-  float dy(int i) const { return on<Term::kDy>(m, i); }
-  float dy_u(int i) const { return on<Term::kDy>(m_u, i); }
-  float dt(int i) const { return on<Term::kDt>(m, i); }
-  float dt_p(int i) const { return on<Term::kDt>(m_p, i); }
-  float dxdt(int i) const { return on<Term::kDxdt>(m, i); }
-  float dxdt_p(int i) const { return on<Term::kDxdt>(m_p, i); }
-  float dydt(int i) const { return on<Term::kDydt>(m, i); }
-  float dydt_u(int i) const { return on<Term::kDydt>(m_u, i); }
-  float dydt_p(int i) const { return on<Term::kDydt>(m_p, i); }
-  float dydt_pu(int i) const { return on<Term::kDydt>(m_pu, i); }
-};
-
-// The same weights where all four mask rows are constant over a span of a
-// line (everywhere but at the window's borders and around dropped samples):
-// broadcast scalars, so the stencil runs without unpacking bits (2.2x faster
-// on 720p; the values are the same, so is the result).
-struct ConstWeights {
-  float wp, wdx, wdy, wdy_u, wdt, wdt_p, wdxdt, wdxdt_p, wdydt, wdydt_u, wdydt_p, wdydt_pu;
-
-  ConstWeights() = default;
-  ConstWeights(const MaskWeights& m, int i)
-      : wp(m.p(i)),
-        wdx(m.dx(i)),
-        wdy(m.dy(i)),
-        wdy_u(m.dy_u(i)),
-        wdt(m.dt(i)),
-        wdt_p(m.dt_p(i)),
-        wdxdt(m.dxdt(i)),
-        wdxdt_p(m.dxdt_p(i)),
-        wdydt(m.dydt(i)),
-        wdydt_u(m.dydt_u(i)),
-        wdydt_p(m.dydt_p(i)),
-        wdydt_pu(m.dydt_pu(i)) {}
-  float p(int) const { return wp; }
-  float dx(int) const { return wdx; }
-  float dy(int) const { return wdy; }
-  float dy_u(int) const { return wdy_u; }
-  float dt(int) const { return wdt; }
-  float dt_p(int) const { return wdt_p; }
-  float dxdt(int) const { return wdxdt; }
-  float dxdt_p(int) const { return wdxdt_p; }
-  float dydt(int) const { return wdydt; }
-  float dydt_u(int) const { return wdydt_u; }
-  float dydt_p(int) const { return wdydt_p; }
-  float dydt_pu(int) const { return wdydt_pu; }
-};
-
-// Row pointers for the stencil at (y, t): x[dt + 1][dy + 1] is the row of
-// frame t + dt, line y + dy, clamped into the grid. A clamped row only ever
-// meets a zero weight, so its values never matter (they are finite).
-template <class Weights>
-struct RowCtx {
-  const float* x[3][3];
-  Weights w;
-};
-
-// (A x)(q) gathered from every constraint that touches q (coefficient a_c(q)
-// of x(q) in H_c): y = w_p x + Σ_c a_c(q) w_c (H_c x). `ls` zeroes the
-// constraints left of column 0, `il`/`ir` are the clamped neighbours.
-template <bool kTemporal, class Weights>
-inline float stencil(const RowCtx<Weights>& r, int i, int il, int ir, float ls) {
-  const Weights& w = r.w;
-  const float* xc = r.x[1][1];
-  const float c = xc[i];
-  float y = w.p(i) * c;
-  y += w.dx(i) * (c - xc[ir]) + ls * w.dx(il) * (c - xc[il]);
-  y += w.dy(i) * (c - r.x[1][2][i]) + w.dy_u(i) * (c - r.x[1][0][i]);
-  if constexpr (kTemporal) {
-    const float* xn = r.x[2][1];
-    const float* xp = r.x[0][1];
-    y += w.dt(i) * (c - xn[i]) + w.dt_p(i) * (c - xp[i]);
-    // H_dxdt at (j, s) = [x(j+1,s+1) − x(j,s+1)] − [x(j+1,s) − x(j,s)]; a = frame s, b = frame s+1.
-    const auto hx = [](const float* a, const float* b, int j, int jr) { return (b[jr] - b[j]) - (a[jr] - a[j]); };
-    y += w.dxdt(i) * hx(xc, xn, i, ir) - ls * w.dxdt(il) * hx(xc, xn, il, i) - w.dxdt_p(i) * hx(xp, xc, i, ir) +
-         ls * w.dxdt_p(il) * hx(xp, xc, il, i);
-    // H_dydt at line y, frame s = [b(y+1) − b(y)] − [a(y+1) − a(y)].
-    const auto hy = [i](const float* a, const float* ad, const float* b, const float* bd) {
-      return (bd[i] - b[i]) - (ad[i] - a[i]);
-    };
-    y += w.dydt(i) * hy(xc, r.x[1][2], xn, r.x[2][2]) - w.dydt_u(i) * hy(r.x[1][0], xc, r.x[2][0], xn) -
-         w.dydt_p(i) * hy(xp, r.x[0][2], xc, r.x[1][2]) + w.dydt_pu(i) * hy(r.x[0][0], xp, r.x[1][0], xc);
-  }
-  return y;
-}
-
-template <bool kTemporal, class Weights>
-void apply_interior(const RowCtx<Weights>& r, int i0, int i1, float* q) {
-  // q never aliases the inputs; without this promise GCC gives up on the
-  // temporal stencil (more pointers than its runtime alias-check budget) and
-  // runs it scalar, 3x slower (measured).
-#pragma GCC ivdep
-  for (int i = i0; i < i1; ++i) q[i] = stencil<kTemporal>(r, i, i - 1, i + 1, 1.0f);
-}
-
-// One line of q = A p; returns its p·q. In mask mode `uniform[s]` says whether
-// span s (columns [s·kSpan, (s+1)·kSpan) of the interior) may use ConstWeights.
-template <bool kTemporal, class Weights>
-float apply_row(const RowCtx<Weights>& r, const uint8_t* uniform, int width, const float* p, float* q) {
-  const int W = width;
-  if (W == 1) {
-    q[0] = stencil<kTemporal>(r, 0, 0, 0, 0.0f);
-    return p[0] * q[0];
-  }
-  q[0] = stencil<kTemporal>(r, 0, 0, 1, 0.0f);
-  if constexpr (std::is_same_v<Weights, MaskWeights>) {
-    RowCtx<ConstWeights> c;
-    std::copy(&r.x[0][0], &r.x[0][0] + 9, &c.x[0][0]);
-    for (int s = 0, i0 = 1; i0 < W - 1; ++s) {
-      const int i1 = std::min(W - 1, (s + 1) * kSpan);
-      if (uniform[s]) {
-        c.w = ConstWeights(r.w, i0 - 1);
-        apply_interior<kTemporal>(c, i0, i1, q);
-      } else {
-        apply_interior<kTemporal>(r, i0, i1, q);
-      }
-      i0 = i1;
-    }
-  } else {
-    apply_interior<kTemporal>(r, 1, W - 1, q);
-  }
-  q[W - 1] = stencil<kTemporal>(r, W - 1, W - 2, W - 1, 1.0f);
-  // Eight partial sums so the reduction vectorises (no float reassociation).
-  float acc[8] = {};
-  int i = 0;
-  for (; i + 8 <= W; i += 8)
-    for (int j = 0; j < 8; ++j) acc[j] += p[i + j] * q[i + j];
-  for (; i < W; ++i) acc[0] += p[i] * q[i];
-  float dot = 0;
-  for (float a : acc) dot += a;
-  return dot;
-}
+// Mask mode checks for constant weights per span of kStencilSpan columns
+// (poisson_kernels.inl), so one dropped sample only slows its own span.
+int span_count(int width) { return (width + kStencilSpan - 1) / kStencilSpan; }
 
 }  // namespace
 
@@ -213,14 +45,14 @@ PoissonSystem::PoissonSystem(Grid grid, bool temporal, const std::array<float, k
       if (is_temporal(t)) term_w_[term_index(t)] = 0.0f;
   zero_bits_.assign(size_t(grid_.width), 0);
   zero_row_.assign(size_t(grid_.width), 0.0f);
-  // Span s of the interior stencil reads mask columns [s·kSpan − 1, (s+1)·kSpan) ∩ [0, W − 1).
+  // Span s of the interior stencil reads mask columns [s·kStencilSpan − 1, (s+1)·kStencilSpan) ∩ [0, W − 1).
   const int W = grid_.width, spans = span_count(W);
   uniform_spans_.assign(size_t(grid_.rows()) * spans, 0);
   all_uniform_.assign(size_t(spans), 1);
   tbb::parallel_for(0, grid_.rows(), [&](int row) {
     const uint8_t* m = bits_.data() + size_t(row) * W;
     for (int s = 0; s < spans; ++s) {
-      const int a = std::max(0, s * kSpan - 1), b = std::min(W - 1, (s + 1) * kSpan);
+      const int a = std::max(0, s * kStencilSpan - 1), b = std::min(W - 1, (s + 1) * kStencilSpan);
       uniform_spans_[size_t(row) * spans + s] = std::all_of(m + a, m + std::max(a, b), [&](uint8_t v) { return v == m[a]; });
     }
   });
@@ -229,11 +61,7 @@ PoissonSystem::PoissonSystem(Grid grid, bool temporal, const std::array<float, k
 int PoissonSystem::row_grain() const { return std::max(1, kChunkPixels / std::max(1, grid_.width)); }
 
 double PoissonSystem::apply(const float* p, float* q) const {
-  return masked_ ? apply_impl<MaskWeights>(p, q) : apply_impl<FloatWeights>(p, q);
-}
-
-template <class Weights>
-double PoissonSystem::apply_impl(const float* p, float* q) const {
+  const PoissonKernels& kernels = poisson_kernels();
   const Grid g = grid_;
   const size_t W = size_t(g.width);
   const auto row_of = [&](const float* base, int t, int y) -> const float* {
@@ -259,37 +87,44 @@ double PoissonSystem::apply_impl(const float* p, float* q) const {
   // One line (t, y) of q = A p; returns its p·q. `uniform` is per-task scratch.
   const auto line = [&](int t, int y, std::vector<uint8_t>& uniform) -> float {
     const size_t row = size_t(t) * g.height + y;
-    RowCtx<Weights> r;
+    StencilLine l;
     for (int dt = -1; dt <= 1; ++dt)
-      for (int dy = -1; dy <= 1; ++dy) r.x[dt + 1][dy + 1] = row_of(p, t + dt, y + dy);
-    if constexpr (std::is_same_v<Weights, MaskWeights>) {
-      r.w = {mrow(t, y), mrow(t, y - 1), mrow(t - 1, y), mrow(t - 1, y - 1), {}, dropped_primal_w_};
-      for (int k = 0; k < kTermCount; ++k) r.w.w[k] = term_w_[k];
-    } else {
-      r.w.wp = wrow(Term::kPrimal, t, y);
-      r.w.wdx = wrow(Term::kDx, t, y);
-      r.w.wdy = wrow(Term::kDy, t, y);
-      r.w.wdy_u = wrow(Term::kDy, t, y - 1);
-      if (temporal_) {
-        r.w.wdt = wrow(Term::kDt, t, y);
-        r.w.wdt_p = wrow(Term::kDt, t - 1, y);
-        r.w.wdxdt = wrow(Term::kDxdt, t, y);
-        r.w.wdxdt_p = wrow(Term::kDxdt, t - 1, y);
-        r.w.wdydt = wrow(Term::kDydt, t, y);
-        r.w.wdydt_u = wrow(Term::kDydt, t, y - 1);
-        r.w.wdydt_p = wrow(Term::kDydt, t - 1, y);
-        r.w.wdydt_pu = wrow(Term::kDydt, t - 1, y - 1);
-      }
-    }
-    float* qr = q + row * W;
-    const float* pr = p + row * W;
-    if constexpr (std::is_same_v<Weights, MaskWeights>) {
+      for (int dy = -1; dy <= 1; ++dy) l.x[dt + 1][dy + 1] = row_of(p, t + dt, y + dy);
+    l.p = p + row * W;
+    l.q = q + row * W;
+    l.width = g.width;
+    l.temporal = temporal_;
+    l.masked = masked_;
+    if (masked_) {
+      l.mask[0] = mrow(t, y);
+      l.mask[1] = mrow(t, y - 1);
+      l.mask[2] = mrow(t - 1, y);
+      l.mask[3] = mrow(t - 1, y - 1);
+      for (int k = 0; k < kTermCount; ++k) l.term_weight[k] = term_w_[k];
+      l.dropped_primal_weight = dropped_primal_w_;
       const uint8_t *u0 = uniform_row(t, y), *u1 = uniform_row(t, y - 1);
       const uint8_t *u2 = uniform_row(t - 1, y), *u3 = uniform_row(t - 1, y - 1);
       for (int s = 0; s < spans; ++s) uniform[size_t(s)] = u0[s] & u1[s] & u2[s] & u3[s];
+      l.uniform_spans = uniform.data();
+    } else {
+      // Order of StencilLine::weight_rows; a spatial system has no temporal rows.
+      const float** w = l.weight_rows;
+      w[0] = wrow(Term::kPrimal, t, y);
+      w[1] = wrow(Term::kDx, t, y);
+      w[2] = wrow(Term::kDy, t, y);
+      w[3] = wrow(Term::kDy, t, y - 1);
+      if (temporal_) {
+        w[4] = wrow(Term::kDt, t, y);
+        w[5] = wrow(Term::kDt, t - 1, y);
+        w[6] = wrow(Term::kDxdt, t, y);
+        w[7] = wrow(Term::kDxdt, t - 1, y);
+        w[8] = wrow(Term::kDydt, t, y);
+        w[9] = wrow(Term::kDydt, t, y - 1);
+        w[10] = wrow(Term::kDydt, t - 1, y);
+        w[11] = wrow(Term::kDydt, t - 1, y - 1);
+      }
     }
-    return temporal_ ? apply_row<true>(r, uniform.data(), g.width, pr, qr)
-                     : apply_row<false>(r, uniform.data(), g.width, pr, qr);
+    return kernels.apply_line(l);
   };
   // Mask mode walks blocks of kBlockRows lines through all frames (see
   // kBlockRows). Float weights stream twelve weight rows per line: there the

@@ -9,7 +9,8 @@
 // validity mask (one byte per pixel instead of six float arrays: the window
 // solve is memory bound), the L1 IRLS solve per-constraint float weights
 // 1/(|r| + ε). A is applied directly on the planar arrays as a 3×3×3 stencil
-// (never assembled), in parallel with TBB.
+// (never assembled), in parallel with TBB, by the fastest of the kernels in
+// core/recon/poisson_kernels.h this CPU runs.
 #pragma once
 
 #include <array>
@@ -53,8 +54,6 @@ class PoissonSystem {
   int row_grain() const;
 
  private:
-  template <class Weights>
-  double apply_impl(const float* p, float* q) const;
   void rhs_masked(const std::array<const Field*, kTermCount>& targets, Field* b) const;
   // Weight of constraint t at pixel i in either mode (setup passes only).
   float weight_at(Term t, size_t i) const {

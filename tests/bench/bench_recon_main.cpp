@@ -12,6 +12,8 @@
 // |difference|, relMSE, the seam metric along tile borders); --diff-png
 // writes |tiled − whole| of the centre frame around a tile corner, scaled
 // so that the largest difference is white.
+// GDVR_POISSON_KERNELS=baseline|avx2|avx512 picks the solve's kernels
+// (core/recon/poisson_kernels.h; all give the same bits).
 // --impulse prints the L2 operator's impulse response against distance, from
 // which the default halo is chosen (docs/reconstruction.md, "Tiled solve").
 #include <sys/resource.h>
@@ -32,6 +34,7 @@
 #include "core/image/error_metrics.h"
 #include "core/io/image_io.h"
 #include "core/recon/impulse_response.h"
+#include "core/recon/poisson_kernels.h"
 #include "core/recon/reconstruct.h"
 #include "core/recon/tile_seams.h"
 #include "core/recon/tiled_reconstruct.h"
@@ -281,8 +284,8 @@ int main(int argc, char** argv) {
     impulse_response(a);
     return 0;
   }
-  std::printf("gdvr-bench-recon: %dx%d, threads %d, runs %d, window %d frames (hop %d)\n", a.width, a.height, threads,
-              a.runs, a.frames, window_hop(a.frames));
+  std::printf("gdvr-bench-recon: %dx%d, threads %d, runs %d, window %d frames (hop %d), %s kernels\n", a.width,
+              a.height, threads, a.runs, a.frames, window_hop(a.frames), poisson_kernels().isa);
 
   if (a.single) {
     GradientWindow w;

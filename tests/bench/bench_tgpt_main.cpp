@@ -15,7 +15,7 @@
 //                   [--ref-cache /tmp/tgpt_ref]   (reference EXRs written once, then read)
 //   gdvr-bench-tgpt --recon [--width 1280 --height 720] [--shot 40] [--window 20] [--method l2]
 //                   [--tile-size 512] [--tile-halo 48] [--memory-limit-mib M] [--spill-dir DIR]
-//   (--tile-size 0: the whole-frame solve; --memory-limit-mib: buffered frames
+//   (GDVR_POISSON_KERNELS=baseline|avx2|avx512 picks the solve's kernels; --tile-size 0: the whole-frame solve; --memory-limit-mib: buffered frames
 //   beyond M MiB are spilled to DIR and read back a tile at a time; -1: none)
 // Run from the repository root (or pass --demo PATH to the job file).
 #include <algorithm>
@@ -36,6 +36,7 @@
 
 #include "core/io/image_io.h"
 #include "core/job/job_runner.h"
+#include "core/recon/poisson_kernels.h"
 #include "core/recon/recon_settings.h"
 #include "core/recon/tiled_reconstruct.h"
 #include "core/temporal/spilling_frame_store.h"
@@ -405,10 +406,11 @@ int recon(const Args& a) {
   auto grid = tile_grid_for(s.recon, a.width, a.height);
   std::printf("stage 2 %s, %dx%d, shot %d frames, window %d (hop %d), %s: %d windows, %.2f s per output frame "
               "(stage 2 only; %.1f s total incl. %.1f s synthesising buffers), max buffered frames %d (at most %d "
-              "spilled), peak RSS %.0f MiB\n",
+              "spilled), peak RSS %.0f MiB, %s kernels\n",
               a.method.c_str(), a.width, a.height, n, s.window, s.effective_hop(),
               grid.ok() ? grid->to_string().c_str() : "?", cache.windows_solved(), solve_seconds / emitted, total,
-              gen_seconds, schedule.max_buffered(), buffers.most_spilled_frames(), peak_rss_mib());
+              gen_seconds, schedule.max_buffered(), buffers.most_spilled_frames(), peak_rss_mib(),
+              poisson_kernels().isa);
   return 0;
 }
 
