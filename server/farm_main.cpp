@@ -140,17 +140,20 @@ std::vector<int> frame_and_successor(const FarmJob& job, int frame) {
 
 // The tile grid of the job's reconstruction for the size of `buffers`' frames.
 Expected<TileGrid> grid_of(const JobFinalizer& finalizer, const FrameBuffers& buffers) {
+  if (buffers.on_disk) return finalizer.tile_grid(buffers.on_disk->width(), buffers.on_disk->height());
   const ImageLayer* direct = buffers.layers.find("direct");
   if (!direct) return invalid_argument("frame " + std::to_string(buffers.frame) + ": buffers lack the 'direct' layer");
   return finalizer.tile_grid(direct->image.width(), direct->image.height());
 }
 
-// Reads into `loaded` the buffers of `frames` it lacks (for finalizing `for_frame`).
+// Reads into `loaded` the buffers of `frames` it lacks (for finalizing
+// `for_frame`): whole, or `by_region`, left in their files to be read a
+// region at a time.
 Failure load_buffers(const FarmJob& job, const std::string& buffers_dir, const std::vector<int>& frames, int for_frame,
-                     std::map<int, FrameBuffers>* loaded) {
+                     std::map<int, FrameBuffers>* loaded, bool by_region = false) {
   for (int n : frames) {
     if (loaded->count(n)) continue;
-    auto fb = read_buffers(job, buffers_dir, n, for_frame);
+    auto fb = by_region ? open_buffers(job, buffers_dir, n, for_frame) : read_buffers(job, buffers_dir, n, for_frame);
     if (!fb.ok())
       return fail(fb.status().code() == StatusCode::kNotFound ? kExitMissingBuffers : kExitFailed,
                   fb.status().to_string());
@@ -215,7 +218,11 @@ Failure cmd_finalize_tiles(const FarmJob& job, const std::vector<int>& frames, c
   for (int f : frames) {
     if (g_cancel) return fail(cancelled("cancelled"));
     if (done(f)) continue;
-    if (Failure bad = load_buffers(job, buffers_dir, finalizer.value()->frames_needed(f), f, &loaded); bad.failed())
+    // Only the tiles' padded regions of the window's frames are read, each
+    // when its tile is solved: the task never holds a frame whole.
+    if (Failure bad = load_buffers(job, buffers_dir, finalizer.value()->frames_needed(f), f, &loaded,
+                                   /* by_region = */ true);
+        bad.failed())
       return bad;
     auto grid = grid_of(*finalizer.value(), loaded.at(f));
     if (!grid.ok()) return fail(grid.status());

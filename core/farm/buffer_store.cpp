@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/io/atomic_file.h"
+#include "core/io/exr_region_file.h"
 #include "core/io/image_io.h"
 #include "core/job/job_outputs.h"
 
@@ -88,7 +89,11 @@ Status write_buffers(const FarmJob& job, const std::string& dir, const FrameBuff
   return write_text_atomic((fs::path(dir) / buffers_json_name(fb.frame)).string(), marker.dump(2) + "\n");
 }
 
-Expected<FrameBuffers> read_buffers(const FarmJob& job, const std::string& dir, int frame, int for_frame) {
+namespace {
+
+// A frame's complete buffers, read whole or left in their EXR.
+Expected<FrameBuffers> load_buffers(const FarmJob& job, const std::string& dir, int frame, int for_frame,
+                                    bool whole) {
   BufferCheck c = check_buffers(job, dir, frame);
   const std::string exr = (fs::path(dir) / buffers_exr_name(frame)).string();
   const std::string context = "frame " + std::to_string(for_frame) +
@@ -97,13 +102,29 @@ Expected<FrameBuffers> read_buffers(const FarmJob& job, const std::string& dir, 
   if (c.state == BufferState::kMissing)
     return not_found(context + "buffers missing: " + exr + " (" + c.why + "); render them first with " +
                      "gdvr-farm render " + job.path + " --frames " + std::to_string(frame) + " --buffers " + dir);
-  auto layers = read_exr(exr);
-  if (!layers.ok()) return layers.status().with_context(context);
   FrameBuffers fb;
   fb.frame = frame;
-  fb.layers = std::move(layers.value());
   fb.stats = c.stats;
+  if (whole) {
+    auto layers = read_exr(exr);
+    if (!layers.ok()) return layers.status().with_context(context);
+    fb.layers = std::move(layers.value());
+  } else {
+    auto file = ExrRegionFile::open(exr);
+    if (!file.ok()) return file.status().with_context(context);
+    fb.on_disk = std::move(file.value());
+  }
   return fb;
+}
+
+}  // namespace
+
+Expected<FrameBuffers> read_buffers(const FarmJob& job, const std::string& dir, int frame, int for_frame) {
+  return load_buffers(job, dir, frame, for_frame, /* whole = */ true);
+}
+
+Expected<FrameBuffers> open_buffers(const FarmJob& job, const std::string& dir, int frame, int for_frame) {
+  return load_buffers(job, dir, frame, for_frame, /* whole = */ false);
 }
 
 Status write_job_stats(const FarmJob& job, const std::string& buffers_dir, const std::string& out_dir) {

@@ -40,6 +40,11 @@ Status write_buffers(const FarmJob& job, const std::string& dir, const FrameBuff
 // window needs it): NOT_FOUND when missing (the message says how to render
 // them), FAILED_PRECONDITION when they belong to another job.
 Expected<FrameBuffers> read_buffers(const FarmJob& job, const std::string& dir, int frame, int for_frame);
+// The same buffers left in their EXR (FrameBuffers::on_disk, `layers` empty):
+// only the header is read now, and each region the finalize asks for later is
+// read then, decompressing only its rows. A tile task (finalize --tiles) reads
+// so only its tiles' part of each window frame, not every frame whole.
+Expected<FrameBuffers> open_buffers(const FarmJob& job, const std::string& dir, int frame, int for_frame);
 
 // stats.json in the output folder, as gdvr-render and the server write it:
 // every frame of the job that is final there (by this task or an earlier

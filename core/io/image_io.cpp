@@ -38,6 +38,7 @@
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
 
+#include "core/image/image_region.h"
 #include "core/io/atomic_file.h"
 
 namespace gdvr {
@@ -132,29 +133,94 @@ bool is_deep(const Imf::Header& header) {
 
 // ---- EXR reading -----------------------------------------------------------
 
-// Reads the named channels of one part into an interleaved float image. The
-// frame buffer is FLOAT whatever the file stores; OpenEXR converts half/uint.
-Expected<Image> read_part_channels(Imf::MultiPartInputFile& file, int part,
-                                   const std::vector<std::string>& names, const std::string& path) {
+// OpenEXR stores and decodes whole scanlines (readPixels fills every column of
+// the data window), so a region read that keeps only some columns stages its
+// rows at full width, a band at a time, and copies the columns out. A band is
+// about kRegionBandBytes of pixels and a whole number of kRegionBandAlign rows
+// from the data window's top: 32 rows is a whole number of every compression's
+// chunks but DWAB's (256), so consecutive bands never decompress one chunk twice.
+constexpr size_t kRegionBandBytes = size_t(4) << 20;
+constexpr int kRegionBandAlign = 32;
+
+// Reads rows [y0, y1) of the image (0: the data window's top) of the channel
+// groups `layers` into `dst` (one full-width image per group, its first row
+// row y0): one frame buffer for every group, so that each chunk of the file is
+// decompressed once, not once per layer. FLOAT whatever the file stores;
+// OpenEXR converts half/uint.
+void read_rows(Imf::InputPart& in, const std::vector<std::vector<std::string>>& layers, std::vector<Image>* dst,
+               int y0, int y1) {
+  const Imath::Box2i dw = in.header().dataWindow();
+  const Imath::Box2i rows(Imath::V2i(dw.min.x, dw.min.y + y0), Imath::V2i(dw.max.x, dw.min.y + y1 - 1));
+  Imf::FrameBuffer fb;
+  for (size_t l = 0; l < layers.size(); ++l) {
+    Image& image = (*dst)[l];
+    const size_t nc = size_t(image.channels());
+    for (size_t c = 0; c < nc; ++c)
+      fb.insert(layers[l][c], Imf::Slice::Make(Imf::FLOAT, image.data().data() + c, rows, sizeof(float) * nc,
+                                               sizeof(float) * nc * size_t(image.width())));
+  }
+  in.setFrameBuffer(fb);
+  in.readPixels(rows.min.y, rows.max.y);
+}
+
+// The channel groups `layers` of one part, each as one interleaved float
+// image, cropped to `region` (in the part's pixels; null: all of them).
+Expected<std::vector<Image>> read_part_layers(Imf::MultiPartInputFile& file, int part,
+                                              const std::vector<std::vector<std::string>>& layers,
+                                              const PixelRect* region, const std::string& path) {
   Imf::InputPart in(file, part);
   const Imath::Box2i dw = in.header().dataWindow();
   const int64_t width = int64_t(dw.max.x) - dw.min.x + 1;
   const int64_t height = int64_t(dw.max.y) - dw.min.y + 1;
   GDVR_RETURN_IF_ERROR(check_dimensions(path, width, height));
+  const PixelRect whole = PixelRect::whole(int(width), int(height));
+  const PixelRect rect = region ? *region : whole;
+  if (rect.empty() || !whole.contains(rect))
+    return invalid_argument(path + ": region " + rect.to_string() + " is not inside the image's " +
+                            std::to_string(width) + "x" + std::to_string(height) + " pixels");
+  size_t channels = 0;
+  for (const std::vector<std::string>& names : layers)
+    for (const std::string& name : names) {
+      const Imf::Channel* ch = in.header().channels().findChannel(name);
+      if (ch && (ch->xSampling != 1 || ch->ySampling != 1))
+        return unimplemented(path + ": channel '" + name + "' is subsampled");
+      ++channels;
+    }
 
-  const int nc = int(names.size());
-  Image image(int(width), int(height), nc);
-  Imf::FrameBuffer fb;
-  for (int c = 0; c < nc; ++c) {
-    const Imf::Channel* ch = in.header().channels().findChannel(names[c]);
-    if (ch && (ch->xSampling != 1 || ch->ySampling != 1))
-      return unimplemented(path + ": channel '" + names[c] + "' is subsampled");
-    fb.insert(names[c], Imf::Slice::Make(Imf::FLOAT, image.data().data() + c, dw,
-                                         sizeof(float) * nc, sizeof(float) * nc * width));
+  std::vector<Image> out;
+  for (const std::vector<std::string>& names : layers) out.emplace_back(rect.width(), rect.height(), int(names.size()));
+  if (rect.x0 == 0 && rect.x1 == whole.x1) {
+    read_rows(in, layers, &out, rect.y0, rect.y1);  // whole rows: straight into the result
+    return out;
   }
-  in.setFrameBuffer(fb);
-  in.readPixels(dw.min.y, dw.max.y);
-  return image;
+  const size_t row_bytes = size_t(width) * std::max<size_t>(channels, 1) * sizeof(float);
+  const int band = std::max(kRegionBandAlign, int(kRegionBandBytes / row_bytes) / kRegionBandAlign * kRegionBandAlign);
+  std::vector<Image> staging;
+  for (const std::vector<std::string>& names : layers)
+    staging.emplace_back(int(width), std::min(band, rect.height()), int(names.size()));
+  // Bands between multiples of `band` rows, in the order the file stores its
+  // lines (OpenEXR reads any order, the written one fastest).
+  std::vector<std::pair<int, int>> bands;
+  for (int y0 = rect.y0; y0 < rect.y1;) {
+    const int y1 = std::min(rect.y1, (y0 / band + 1) * band);
+    bands.emplace_back(y0, y1);
+    y0 = y1;
+  }
+  if (in.header().lineOrder() == Imf::DECREASING_Y) std::reverse(bands.begin(), bands.end());
+  for (const auto& [y0, y1] : bands) {
+    read_rows(in, layers, &staging, y0, y1);
+    for (size_t l = 0; l < layers.size(); ++l)
+      paste_region(staging[l], {rect.x0, 0, rect.x1, y1 - y0}, &out[l], 0, y0 - rect.y0);
+  }
+  return out;
+}
+
+// The named channels of one part as one interleaved float image.
+Expected<Image> read_part_channels(Imf::MultiPartInputFile& file, int part,
+                                   const std::vector<std::string>& names, const std::string& path) {
+  auto images = read_part_layers(file, part, {names}, nullptr, path);
+  if (!images.ok()) return images.status();
+  return std::move(images.value().front());
 }
 
 // Luminance-chroma (Y,RY,BY) files: only RgbaInputFile knows the conversion.
@@ -332,7 +398,11 @@ Status write_exr(const std::string& path, const LayeredImage& image, bool half_f
   return commit_temporary(tmp, path);
 }
 
-Expected<LayeredImage> read_exr(const std::string& path) {
+namespace {
+
+// read_exr and read_exr_region: every non-deep part's channels, grouped into
+// layers, cropped to `region` (null: whole).
+Expected<LayeredImage> read_exr_layers(const std::string& path, const PixelRect* region) {
   if (!file_exists(path)) return not_found(path + ": no such file or not readable");
   configure_openexr();
   try {
@@ -370,18 +440,50 @@ Expected<LayeredImage> read_exr(const std::string& path) {
         if (!by_layer.count(layer)) layer_order.push_back(layer);
         by_layer[layer].push_back(n);
       }
-      for (const std::string& layer : layer_order) {
-        Expected<Image> img = read_part_channels(file, p, by_layer[layer], path);
-        if (!img.ok()) return img.status();
+      if (layer_order.empty()) continue;  // a part without channels has nothing to read
+      std::vector<std::vector<std::string>> groups;
+      for (const std::string& layer : layer_order) groups.push_back(by_layer[layer]);
+      auto images = read_part_layers(file, p, groups, region, path);
+      if (!images.ok()) return images.status();
+      for (size_t l = 0; l < layer_order.size(); ++l) {
+        const std::string& layer = layer_order[l];
         std::vector<std::string> channels;
         for (const std::string& n : by_layer[layer]) channels.push_back(split_channel_name(n).second);
         std::string name = layer;
         if (!part_prefix.empty()) name = layer.empty() ? part_prefix : part_prefix + "." + layer;
-        result.add(name, std::move(channels), std::move(img).value());
+        result.add(name, std::move(channels), std::move(images.value()[l]));
       }
     }
     if (result.layers.empty()) return invalid_argument(path + ": EXR has no readable channels");
     return result;
+  } catch (const std::exception& e) {
+    return invalid_argument(path + ": cannot read EXR: " + e.what());
+  }
+}
+
+}  // namespace
+
+Expected<LayeredImage> read_exr(const std::string& path) { return read_exr_layers(path, nullptr); }
+
+Expected<LayeredImage> read_exr_region(const std::string& path, const PixelRect& rect) {
+  return read_exr_layers(path, &rect);
+}
+
+Expected<PixelRect> read_exr_extent(const std::string& path) {
+  if (!file_exists(path)) return not_found(path + ": no such file or not readable");
+  configure_openexr();
+  try {
+    Imf::MultiPartInputFile file(path.c_str());
+    for (int p = 0; p < file.parts(); ++p) {
+      const Imf::Header& h = file.header(p);
+      if (is_deep(h)) continue;
+      const Imath::Box2i dw = h.dataWindow();
+      const int64_t width = int64_t(dw.max.x) - dw.min.x + 1;
+      const int64_t height = int64_t(dw.max.y) - dw.min.y + 1;
+      GDVR_RETURN_IF_ERROR(check_dimensions(path, width, height));
+      return PixelRect::whole(int(width), int(height));
+    }
+    return invalid_argument(path + ": EXR has no readable channels");
   } catch (const std::exception& e) {
     return invalid_argument(path + ": cannot read EXR: " + e.what());
   }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/image/image.h"
+#include "core/image/pixel_rect.h"
 #include "core/util/status.h"
 
 namespace gdvr {
@@ -21,6 +22,15 @@ Expected<Image> read_rgb_image(const std::string& path, bool raw = false);
 Status write_exr(const std::string& path, const LayeredImage& image, bool half_float = false);
 // Reads every channel of an EXR back into layers (the inverse of write_exr).
 Expected<LayeredImage> read_exr(const std::string& path);
+// read_exr cropped to `rect` (in the image's pixels: (0, 0) is the data
+// window's top-left corner), without reading the rest of the file: only the
+// rect's scanlines are decompressed, and only its columns are kept. A farm
+// tile task reads its tile's part of a frame's buffers so (docs/farm.md). A
+// rect that is empty or not inside the data window is INVALID_ARGUMENT.
+Expected<LayeredImage> read_exr_region(const std::string& path, const PixelRect& rect);
+// The pixels read_exr would return, [0, width) x [0, height), from the header
+// alone (the first part's data window).
+Expected<PixelRect> read_exr_extent(const std::string& path);
 
 // Writes an 8-bit RGB PNG from already display-encoded values in [0, 1].
 Status write_png8(const std::string& path, const Image& display_rgb);

@@ -13,9 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "core/image/image.h"
-#include "core/image/pixel_rect.h"
-#include "core/util/status.h"
+#include "core/image/layer_region_source.h"
 
 namespace gdvr {
 
@@ -25,7 +23,7 @@ Status write_layer_spill(const std::string& path, const LayeredImage& image);
 // The bytes of `image`'s pixels (what spilling it frees).
 long long layer_pixel_bytes(const LayeredImage& image);
 
-class LayerSpillFile {
+class LayerSpillFile final : public LayerRegionSource {
  public:
   // Reads and checks the header; the pixels stay on disk.
   static Expected<std::unique_ptr<LayerSpillFile>> open(const std::string& path);
@@ -37,10 +35,10 @@ class LayerSpillFile {
   LayerSpillFile(const LayerSpillFile&) = delete;
   LayerSpillFile& operator=(const LayerSpillFile&) = delete;
 
-  int width() const { return width_; }
-  int height() const { return height_; }
+  int width() const override { return width_; }
+  int height() const override { return height_; }
   // Every layer cropped to `rect`, which must lie inside the frame.
-  Expected<LayeredImage> read(const PixelRect& rect) const;
+  Expected<LayeredImage> read(const PixelRect& rect) const override;
 
  private:
   LayerSpillFile() = default;

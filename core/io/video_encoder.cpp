@@ -263,6 +263,9 @@ Expected<std::unique_ptr<VideoEncoder>> VideoEncoder::open(const std::string& pa
   c->time_base = AVRational{options.fps_den, options.fps_num};
   c->framerate = AVRational{options.fps_num, options.fps_den};
   c->sample_aspect_ratio = AVRational{1, 1};
+  // Rendered frames are progressive; said so, QuickTime files carry a 'fiel'
+  // atom (ProRes), which editors otherwise may guess wrong (field order unknown).
+  c->field_order = AV_FIELD_PROGRESSIVE;
   c->color_primaries = AVCOL_PRI_BT709;
   c->color_trc = setup.trc;
   c->colorspace = setup.matrix;

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "core/image/image.h"
-#include "core/io/layer_spill_file.h"
+#include "core/image/layer_region_source.h"
 
 namespace gdvr {
 
@@ -56,10 +56,11 @@ struct FrameBuffers {
   int frame = 0;
   LayeredImage layers;
   FrameStats stats;  // render-stage statistics; finalize adds its own
-  // Set when run_job spilled the layers to disk under its memory limit
-  // (JobRunOptions::memory_limit_bytes): `layers` is then empty, and an
-  // integrator that reads buffers by region (tgpt) reads them from here.
-  std::shared_ptr<const LayerSpillFile> spilled;
+  // Set when the layers are on disk instead: spilled by run_job under its
+  // memory limit (JobRunOptions::memory_limit_bytes), or left in their EXR by
+  // a farm tile task (core/farm/buffer_store.h). `layers` is then empty, and
+  // an integrator that reads buffers by region (tgpt) reads them from here.
+  std::shared_ptr<const LayerRegionSource> on_disk;
 };
 
 // Stage 2: the final frame.

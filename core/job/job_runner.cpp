@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <set>
 
+#include "core/io/layer_spill_file.h"
 #include "core/job/frame_time_budget.h"
 #include "core/job/integrators/integrator_runner.h"
 #include "core/job/job_validation.h"
@@ -398,7 +399,7 @@ Status run_job(const JobSpec& job, const JobRunOptions& options, const JobCallba
         FrameBuffers& fb = buffers[frame];
         auto file = LayerSpillFile::spill(options.spill_dir, fb.layers);
         if (!file.ok()) return file.status().with_context("frame " + std::to_string(frame) + ": --memory-limit: ");
-        fb.spilled = std::move(file.value());
+        fb.on_disk = std::move(file.value());
         fb.layers = LayeredImage();
       }
     }

@@ -67,7 +67,7 @@ class IntegratorRunner {
   // it until measured (core/job/frame_time_budget.h). pt and gpt finalize
   // each frame right after rendering it, so the budget measures theirs at once.
   virtual double finalize_seconds_prior(const FrameRenderSettings& /*settings*/, int /*frames*/) const { return 0; }
-  // Whether finalize reads FrameBuffers::spilled (run_job's memory limit).
+  // Whether finalize reads FrameBuffers::on_disk (run_job's memory limit).
   virtual bool reads_spilled_buffers() const { return false; }
 
   // ---- Stage 2 by tiles (a farm's tiled finalize, docs/farm.md) ----

@@ -155,13 +155,14 @@ double prior_seconds_per_pixel_frame(ReconMethod method) {
 }
 
 // The buffers a finalize is given, a region at a time: frames held in memory
-// are lent or cropped, frames run_job spilled are read from their file.
+// are lent or cropped, frames on disk (spilled by run_job, a farm tile task's
+// EXRs) are read from their file.
 FrameRegionReader region_reader(const std::map<int, FrameBuffers>& buffers) {
   int width = 0, height = 0;
   for (const auto& [f, fb] : buffers) {
-    if (fb.spilled) {
-      width = fb.spilled->width();
-      height = fb.spilled->height();
+    if (fb.on_disk) {
+      width = fb.on_disk->width();
+      height = fb.on_disk->height();
     } else if (!fb.layers.layers.empty()) {
       width = fb.layers.layers.front().image.width();
       height = fb.layers.layers.front().image.height();
@@ -170,13 +171,13 @@ FrameRegionReader region_reader(const std::map<int, FrameBuffers>& buffers) {
   }
   FrameRegionReader r = in_memory_region_reader(width, height, [&buffers](int f) -> const LayeredImage* {
     auto it = buffers.find(f);
-    return it == buffers.end() || it->second.spilled ? nullptr : &it->second.layers;
+    return it == buffers.end() || it->second.on_disk ? nullptr : &it->second.layers;
   });
   r.read = [&buffers, in_memory = std::move(r.read)](int f, const PixelRect& rect)
       -> Expected<std::shared_ptr<const LayeredImage>> {
     auto it = buffers.find(f);
-    if (it == buffers.end() || !it->second.spilled) return in_memory(f, rect);
-    auto region = it->second.spilled->read(rect);
+    if (it == buffers.end() || !it->second.on_disk) return in_memory(f, rect);
+    auto region = it->second.on_disk->read(rect);
     if (!region.ok()) return region.status().with_context("frame " + std::to_string(f) + ": ");
     return std::shared_ptr<const LayeredImage>(std::make_shared<LayeredImage>(std::move(region.value())));
   };

@@ -13,6 +13,7 @@
 
 #include "core/farm/buffer_store.h"
 #include "core/farm/farm_job.h"
+#include "core/image/image_region.h"
 #include "core/io/atomic_file.h"
 #include "core/job/job_outputs.h"
 
@@ -103,11 +104,25 @@ TEST_F(FarmProtocolTest, BuffersCountOnlyWithTheirMarkerAndTheirJob) {
   ASSERT_NE(back->layers.find("primal"), nullptr);
   EXPECT_EQ(back->layers.find("primal")->image.data(), written.layers.find("primal")->image.data());
   EXPECT_EQ(back->stats.spp, 4);
+  // A tile task's view: the header now, each region read when asked for.
+  auto opened = open_buffers(j, buffers(), 1, 2);
+  ASSERT_TRUE(opened.ok()) << opened.status().to_string();
+  EXPECT_TRUE(opened->layers.layers.empty());
+  ASSERT_TRUE(opened->on_disk);
+  const Image& primal = written.layers.find("primal")->image;
+  EXPECT_EQ(opened->on_disk->width(), primal.width());
+  EXPECT_EQ(opened->on_disk->height(), primal.height());
+  const PixelRect rect{1, 1, primal.width(), primal.height()};
+  auto region = opened->on_disk->read(rect);
+  ASSERT_TRUE(region.ok()) << region.status().to_string();
+  EXPECT_EQ(region->find("primal")->image.data(), crop_image(primal, rect).data());
+  EXPECT_EQ(opened->stats.spp, 4);
 
   // Another job's buffers are refused, not mixed in.
   FarmJob other = job(R"({"scene": "scene.xml", "frames": "0-3", "spp": 99})");
   EXPECT_EQ(check_buffers(other, buffers(), 1).state, BufferState::kForeign);
   EXPECT_EQ(read_buffers(other, buffers(), 1, 1).status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_EQ(open_buffers(other, buffers(), 1, 1).status().code(), StatusCode::kFailedPrecondition);
 
   // An EXR cut short (copied in half) does not match its marker's size.
   const fs::path exr = dir_ / "buffers" / buffers_exr_name(1);
@@ -124,6 +139,7 @@ TEST_F(FarmProtocolTest, BuffersCountOnlyWithTheirMarkerAndTheirJob) {
   auto missing = read_buffers(j, buffers(), 1, 1);
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
   EXPECT_NE(missing.status().message().find("gdvr-farm render"), std::string::npos);
+  EXPECT_EQ(open_buffers(j, buffers(), 1, 1).status().code(), StatusCode::kNotFound);
 }
 
 // Farm files are written through core's temporaries, named with host and

@@ -1,5 +1,7 @@
 #include "core/io/image_io.h"
+#include "core/image/image_region.h"
 #include "core/io/atomic_file.h"
+#include "core/io/exr_region_file.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -213,6 +215,109 @@ TEST(ExrRead, MutatedFilesNeverCrash) {
   EXPECT_GT(failures, 0);  // some mutations must have been detected
   std::remove(good.c_str());
   std::remove(mutated.c_str());
+}
+
+// Region reads (a farm tile task's view of a frame's buffers) give exactly
+// the crop of a whole read. 40 channels of 320 pixels are 51 KB a row, so a
+// region read whose columns are cropped stages bands of 64 rows: the rects
+// below cross band borders, span three bands, and touch every edge.
+TEST(ExrRegion, EqualsCropOfWholeRead) {
+  LayeredImage img;
+  for (int l = 0; l < 10; ++l)
+    img.add(l == 0 ? "" : "layer" + std::to_string(l), {"R", "G", "B", "A"}, ramp(320, 200, 4, float(l) * 7.5f));
+  const std::string path = scratch("region.exr");
+  ASSERT_TRUE(write_exr(path, img).ok());
+  Expected<LayeredImage> whole = read_exr(path);
+  ASSERT_TRUE(whole.ok()) << whole.status().to_string();
+
+  Expected<PixelRect> extent = read_exr_extent(path);
+  ASSERT_TRUE(extent.ok()) << extent.status().to_string();
+  EXPECT_EQ(extent.value(), PixelRect::whole(320, 200));
+
+  const PixelRect rects[] = {
+      PixelRect::whole(320, 200),  // the full frame
+      {0, 0, 320, 1},              // first row
+      {0, 199, 320, 200},          // last row
+      {0, 50, 320, 150},           // whole rows: read straight into the result
+      {5, 60, 300, 70},            // across the band border at row 64
+      {100, 63, 200, 129},         // three bands
+      {0, 0, 1, 200},              // first column
+      {319, 0, 320, 200},          // last column
+      {310, 190, 320, 200},        // bottom-right corner
+      {17, 130, 18, 131},          // one pixel
+  };
+  for (const PixelRect& r : rects) {
+    Expected<LayeredImage> region = read_exr_region(path, r);
+    ASSERT_TRUE(region.ok()) << r.to_string() << ": " << region.status().to_string();
+    const LayeredImage crop = crop_layers(whole.value(), r);
+    ASSERT_EQ(region->layers.size(), crop.layers.size()) << r.to_string();
+    for (size_t l = 0; l < crop.layers.size(); ++l) {
+      EXPECT_EQ(region->layers[l].name, crop.layers[l].name);
+      EXPECT_EQ(region->layers[l].channels, crop.layers[l].channels);
+      ASSERT_EQ(region->layers[l].image.width(), r.width());
+      ASSERT_EQ(region->layers[l].image.height(), r.height());
+      EXPECT_EQ(region->layers[l].image.data(), crop.layers[l].image.data()) << r.to_string() << " layer " << l;
+    }
+  }
+
+  // The same through ExrRegionFile, as the farm's tile tasks read buffers.
+  auto file = ExrRegionFile::open(path);
+  ASSERT_TRUE(file.ok()) << file.status().to_string();
+  EXPECT_EQ((*file)->width(), 320);
+  EXPECT_EQ((*file)->height(), 200);
+  auto via_file = (*file)->read({5, 60, 300, 70});
+  ASSERT_TRUE(via_file.ok());
+  EXPECT_EQ(via_file->layers[3].image.data(), crop_image(whole->layers[3].image, {5, 60, 300, 70}).data());
+  std::remove(path.c_str());
+}
+
+TEST(ExrRegion, HalfFloatFileEqualsCrop) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(33, 21, 3, 0.25f));
+  img.add("Z", {"Z"}, ramp(33, 21, 1, 2.0f));
+  const std::string path = scratch("region_half.exr");
+  ASSERT_TRUE(write_exr(path, img, /* half_float = */ true).ok());
+  Expected<LayeredImage> whole = read_exr(path);
+  ASSERT_TRUE(whole.ok());
+  const PixelRect r{3, 4, 30, 20};
+  Expected<LayeredImage> region = read_exr_region(path, r);
+  ASSERT_TRUE(region.ok()) << region.status().to_string();
+  ASSERT_EQ(region->layers.size(), 2u);
+  for (size_t l = 0; l < 2; ++l)
+    EXPECT_EQ(region->layers[l].image.data(), crop_image(whole->layers[l].image, r).data());
+  std::remove(path.c_str());
+}
+
+TEST(ExrRegion, BadRectsAndFilesAreErrors) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(64, 48, 3, 1.0f));
+  const std::string path = scratch("region_bad.exr");
+  ASSERT_TRUE(write_exr(path, img).ok());
+  const PixelRect bad[] = {{5, 5, 5, 10}, {0, 0, 65, 10}, {-1, 0, 10, 10}, {0, 40, 10, 49}, {10, 10, 5, 20}};
+  for (const PixelRect& r : bad) {
+    Expected<LayeredImage> region = read_exr_region(path, r);
+    ASSERT_FALSE(region.ok()) << r.to_string();
+    EXPECT_EQ(region.status().code(), StatusCode::kInvalidArgument) << r.to_string();
+    EXPECT_NE(region.status().message().find(path), std::string::npos) << region.status().message();
+    EXPECT_NE(region.status().message().find(r.to_string()), std::string::npos) << region.status().message();
+  }
+
+  EXPECT_EQ(read_exr_region(scratch("region_missing.exr"), {0, 0, 1, 1}).status().code(), StatusCode::kNotFound);
+  EXPECT_EQ(read_exr_extent(scratch("region_missing.exr")).status().code(), StatusCode::kNotFound);
+  EXPECT_FALSE(ExrRegionFile::open(scratch("region_missing.exr")).ok());
+
+  // A file cut short: the rows still there read, the rows lost are an error
+  // naming the file, never a crash.
+  std::ifstream in(path, std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
+  const std::string truncated = scratch("region_truncated.exr");
+  std::ofstream(truncated, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() * 3 / 4));
+  ASSERT_TRUE(read_exr_extent(truncated).ok());
+  Expected<LayeredImage> cut = read_exr_region(truncated, {0, 40, 64, 48});
+  ASSERT_FALSE(cut.ok());
+  EXPECT_NE(cut.status().message().find(truncated), std::string::npos) << cut.status().message();
+  std::remove(path.c_str());
+  std::remove(truncated.c_str());
 }
 
 TEST(ImageIo, MissingFileIsNotFound) {

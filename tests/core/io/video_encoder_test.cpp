@@ -10,6 +10,7 @@ extern "C" {
 #include <libavutil/pixdesc.h>
 }
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -54,6 +55,8 @@ struct Probe {
   AVColorSpace matrix = AVCOL_SPC_UNSPECIFIED;
   AVColorRange range = AVCOL_RANGE_UNSPECIFIED;
   int profile = 0;
+  int level = 0;
+  AVFieldOrder field_order = AV_FIELD_UNKNOWN;
   int packets = 0;
   std::string format;
 };
@@ -76,6 +79,8 @@ Probe probe(const std::string& path) {
   p.matrix = par->color_space;
   p.range = par->color_range;
   p.profile = par->profile;
+  p.level = par->level;
+  p.field_order = par->field_order;
   p.format = in->iformat->name;
   AVPacket* pkt = av_packet_alloc();
   while (av_read_frame(in.get(), pkt) >= 0) {
@@ -87,18 +92,28 @@ Probe probe(const std::string& path) {
 }
 
 // Decodes the first frame of `path` (to check pixel values end to end).
+// `stream_only`: the decoder is given the stream's own parameter sets
+// (extradata) and none of the container's fields, so the frame's colour tags
+// are those the bitstream carries (H.264's VUI, the ProRes frame header).
 struct FrameFree {
   void operator()(AVFrame* f) const { av_frame_free(&f); }
 };
-std::unique_ptr<AVFrame, FrameFree> decode_first(const std::string& path) {
+std::unique_ptr<AVFrame, FrameFree> decode_first(const std::string& path, bool stream_only = false) {
   AVFormatContext* raw = nullptr;
   if (avformat_open_input(&raw, path.c_str(), nullptr, nullptr) != 0) return nullptr;
   InputPtr in(raw);
-  avformat_find_stream_info(in.get(), nullptr);
+  if (!stream_only) avformat_find_stream_info(in.get(), nullptr);
   const AVCodecParameters* par = in->streams[0]->codecpar;
   const AVCodec* dec = avcodec_find_decoder(par->codec_id);
+  if (!dec) return nullptr;
   AVCodecContext* ctx = avcodec_alloc_context3(dec);
-  avcodec_parameters_to_context(ctx, par);
+  if (!stream_only) {
+    avcodec_parameters_to_context(ctx, par);
+  } else if (par->extradata_size > 0) {
+    ctx->extradata = static_cast<uint8_t*>(av_mallocz(size_t(par->extradata_size) + AV_INPUT_BUFFER_PADDING_SIZE));
+    std::copy_n(par->extradata, par->extradata_size, ctx->extradata);
+    ctx->extradata_size = par->extradata_size;
+  }
   std::unique_ptr<AVFrame, FrameFree> frame(av_frame_alloc());
   bool got = false;
   if (avcodec_open2(ctx, dec, nullptr) == 0) {
@@ -178,6 +193,77 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<CodecCase>& info) {
       return std::string(video_codec_name(info.param.codec));
     });
+
+// The lowest H.264 level (x10) whose frame size and macroblock rate hold
+// width x height at `fps` (ITU-T H.264 Table A-1, MaxFS and MaxMBPS): a
+// stream tagged below it may be refused by hardware decoders.
+int min_h264_level(int width, int height, double fps) {
+  struct Level {
+    int level;
+    long max_fs, max_mbps;
+  };
+  static const Level kLevels[] = {{30, 1620, 40500},     {31, 3600, 108000},    {32, 5120, 216000},
+                                  {40, 8192, 245760},    {42, 8704, 522240},    {50, 22080, 589824},
+                                  {51, 36864, 983040},   {52, 36864, 2073600},  {60, 139264, 4177920}};
+  const long mbs = long((width + 15) / 16) * ((height + 15) / 16);
+  for (const Level& l : kLevels)
+    if (mbs <= l.max_fs && double(mbs) * fps <= double(l.max_mbps)) return l.level;
+  return 62;
+}
+
+// Production sizes (issue: 1080p and 4K shots): the tags, even coded size and
+// H.264 level that players and editors rely on, at 1920x1080. 4K is checked
+// by hand (docs/service.md, "Output layout"): its encode is too slow here.
+TEST(VideoEncoder, FullHdTagsAndLevel) {
+  struct Case {
+    VideoCodec codec;
+    const char* ext;
+    const char* pix_fmt;
+  };
+  for (const Case& k : {Case{VideoCodec::kH264, "mp4", "yuv420p"}, Case{VideoCodec::kProRes, "mov", "yuv422p10le"}}) {
+    SCOPED_TRACE(video_codec_name(k.codec));
+    const std::string path = scratch(std::string("hd.") + k.ext);
+    VideoEncoderOptions o;
+    o.codec = k.codec;
+    o.width = 1920;
+    o.height = 1080;
+    o.fps_num = 24;
+    auto enc = VideoEncoder::open(path, o);
+    ASSERT_TRUE(enc.ok()) << enc.status().to_string();
+    EXPECT_EQ((*enc)->encoded_width(), 1920);
+    EXPECT_EQ((*enc)->encoded_height(), 1080);
+    for (int t = 0; t < 2; ++t) ASSERT_TRUE((*enc)->add_frame(test_frame(1920, 1080, 8 * t)).ok());
+    ASSERT_TRUE((*enc)->close().ok());
+
+    const Probe p = probe(path);
+    EXPECT_EQ(p.packets, 2);
+    EXPECT_EQ(p.pix_fmt, k.pix_fmt);
+    EXPECT_EQ(p.width, 1920);
+    EXPECT_EQ(p.height, 1080);
+    EXPECT_EQ(p.primaries, AVCOL_PRI_BT709);
+    EXPECT_EQ(p.trc, AVCOL_TRC_BT709);
+    EXPECT_EQ(p.matrix, AVCOL_SPC_BT709);
+    EXPECT_EQ(p.range, AVCOL_RANGE_MPEG);
+    EXPECT_EQ(p.field_order, AV_FIELD_PROGRESSIVE);
+    if (k.codec == VideoCodec::kH264) {
+      EXPECT_GE(p.level, min_h264_level(1920, 1080, 24.0));
+      EXPECT_LE(p.level, 52);
+    } else {
+      EXPECT_EQ(p.profile, FF_PROFILE_PRORES_HQ);
+    }
+
+    // The bitstream's own tags, which players read where the container has none.
+    auto frame = decode_first(path, /* stream_only = */ true);
+    ASSERT_TRUE(frame);
+    EXPECT_EQ(frame->width, 1920);
+    EXPECT_EQ(frame->height, 1080);
+    EXPECT_EQ(frame->color_primaries, AVCOL_PRI_BT709);
+    EXPECT_EQ(frame->color_trc, AVCOL_TRC_BT709);
+    EXPECT_EQ(frame->colorspace, AVCOL_SPC_BT709);
+    EXPECT_EQ(frame->color_range, AVCOL_RANGE_MPEG);
+    std::remove(path.c_str());
+  }
+}
 
 TEST(VideoEncoder, H264GreyIsLimitedRangeBt709) {
   const std::string path = scratch("grey.mp4");
