@@ -44,11 +44,16 @@ inline constexpr int kDefaultReconTileSize = 640;
 // Smaller tiles spend most of their work on the halo they throw away; below
 // this a tile size is a typo, not a choice.
 inline constexpr int kMinReconTileSize = 16;
-// Overlap on each side of a tile's core: the measured impulse response of the
-// α = 0.2 operator is 4e-5 of its peak here, and what the cut halo changes
-// in a core is ~80x smaller than what the default CG tolerance itself leaves
-// (docs/reconstruction.md, "Tiled solve").
-inline constexpr int kDefaultReconTileHalo = 32;
+// Overlap on each side of a tile's core, in decay lengths 1/α of the
+// operator's impulse response: at α = 0.2 that is 32 px, where the measured
+// response is 4e-5 of its peak and what the cut halo changes in a core is
+// ~80x smaller than what the default CG tolerance itself leaves
+// (docs/reconstruction.md, "Tiled solve"). The response falls below 1e-4 of
+// its peak within this many decay lengths for α from 0.1 to 1 (measured).
+inline constexpr double kReconTileHaloDecayLengths = 6.4;
+// A large α decays faster than e^(−α r) predicts at small r, but not that
+// much faster: never fewer pixels than this.
+inline constexpr int kMinReconTileHalo = 12;
 
 struct ReconSettings {
   // The library's default for a caller that builds ReconSettings itself (the
@@ -84,10 +89,11 @@ struct ReconSettings {
   // ---- Tiled solve (used by T-GPT's window cache and reconstruct_tiled) ----
   // 0: never tile; otherwise frames larger than tile_size in either axis are
   // solved as tiles of at most tile_size² core pixels, each over its core plus
-  // tile_halo pixels per side (the control variates use at least cv_iterations:
-  // tiled_reconstruct.h).
+  // tile_halo pixels per side; 0: from α (kReconTileHaloDecayLengths / α,
+  // at least kMinReconTileHalo). The control variates use at least
+  // cv_iterations (tiled_reconstruct.h).
   int tile_size = kDefaultReconTileSize;
-  int tile_halo = kDefaultReconTileHalo;
+  int tile_halo = 0;
 
   double term_weight(Term t) const { return term_weights[term_index(t)]; }
   Status validate() const;  // names the offending field

@@ -2,15 +2,23 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "core/image/image_region.h"
 #include "core/recon/reconstruct.h"
 
 namespace gdvr {
 
+int tile_halo_for_alpha(double alpha) {
+  // Frames are far below 2^31 pixels a side: clamp before converting.
+  const double decay = std::ceil(std::min(kReconTileHaloDecayLengths / alpha, 1e9));
+  return std::max(kMinReconTileHalo, int(decay));
+}
+
 int tile_halo_for(const ReconSettings& settings) {
+  const int halo = settings.tile_halo > 0 ? settings.tile_halo : tile_halo_for_alpha(settings.alpha);
   const bool jacobi = settings.method == ReconMethod::kUniform || settings.method == ReconMethod::kWeighted;
-  return jacobi ? std::max(settings.tile_halo, settings.cv_iterations) : settings.tile_halo;
+  return jacobi ? std::max(halo, settings.cv_iterations) : halo;
 }
 
 bool solves_by_tiles(const ReconSettings& settings, int width, int height) {

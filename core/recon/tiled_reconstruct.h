@@ -17,7 +17,12 @@
 
 namespace gdvr {
 
-// The halo `settings` asks for: tile_halo, and for the control variates
+// The halo the L1 and L2 solves need at screening weight α: 6.4 decay
+// lengths of the impulse response (kReconTileHaloDecayLengths), at least
+// kMinReconTileHalo; 32 pixels at the default α = 0.2.
+int tile_halo_for_alpha(double alpha);
+// The halo `settings` asks for: tile_halo (tile_halo_for_alpha(alpha) where
+// it is 0), and for the control variates
 // (uniform, weighted) at least cv_iterations: after k Jacobi sweeps a pixel
 // depends only on pixels within k steps, so that halo makes their tiled
 // result exactly the whole-frame one.

@@ -56,7 +56,7 @@ struct Args {
   std::string demo = "scenes/demo/demo_job.json";
   int res = 64, frames = 24, spp = 8, ref_spp = 2048, runs = 3, window = 20, threads = 2;
   int width = 1280, height = 720, shot = 40;
-  int tile_size = kDefaultReconTileSize, tile_halo = kDefaultReconTileHalo;
+  int tile_size = kDefaultReconTileSize, tile_halo = 0;  // 0: from α
   long long memory_limit_mib = -1;
   std::string spill_dir = "/tmp";
   std::string method = "l2";

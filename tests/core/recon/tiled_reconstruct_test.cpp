@@ -265,15 +265,41 @@ TEST(TiledReconstructTest, ATileSubsetFillsOnlyItsCores) {
 
 TEST(TiledReconstructTest, DefaultHaloCoversTheImpulseResponse) {
   // A T-GPT window of 20 frames, as gdvr-bench-recon --impulse measures it.
-  auto measured = impulse_response_by_distance(ReconSettings(), 2 * kDefaultReconTileHalo + 41, 20);
+  const int halo = tile_halo_for(ReconSettings());
+  EXPECT_EQ(halo, 32);  // at the default α = 0.2
+  auto measured = impulse_response_by_distance(ReconSettings(), 2 * halo + 41, 20);
   ASSERT_TRUE(measured.ok()) << measured.status().to_string();
   const std::vector<double>& response = measured.value();
   // Decays like e^(−α r) (a decade every ln(10)/α ≈ 11.5 px at α = 0.2) ...
   EXPECT_LT(response[20], 0.1 * response[10]);
   // ... and is below 1e-4 of its peak at the default halo, which is not
   // oversized: at half of it the response is still above 1e-4.
-  EXPECT_LT(response[size_t(kDefaultReconTileHalo)], 1e-4);
-  EXPECT_GT(response[size_t(kDefaultReconTileHalo) / 2], 1e-4);
+  EXPECT_LT(response[size_t(halo)], 1e-4);
+  EXPECT_GT(response[size_t(halo) / 2], 1e-4);
+}
+
+TEST(TiledReconstructTest, HaloFollowsAlpha) {
+  // A weaker screening weight reaches further: the halo from α keeps the
+  // impulse response below 1e-4 of its peak at its edge, and is not twice
+  // what that needs, at both ends of the range users pick (α 0.1 and 1).
+  for (double alpha : {0.1, 1.0}) {
+    ReconSettings s;
+    s.alpha = alpha;
+    const int halo = tile_halo_for(s);
+    EXPECT_EQ(halo, tile_halo_for_alpha(alpha));
+    auto measured = impulse_response_by_distance(s, 2 * halo + 41, 20);
+    ASSERT_TRUE(measured.ok()) << measured.status().to_string();
+    const std::vector<double>& response = measured.value();
+    EXPECT_LT(response[size_t(halo)], 1e-4) << "alpha " << alpha << " halo " << halo;
+    EXPECT_GT(response[size_t(halo) / 2], 1e-4) << "alpha " << alpha << " halo " << halo;
+  }
+  // An explicit halo is used as given.
+  ReconSettings s;
+  s.alpha = 0.1;
+  s.tile_halo = 16;
+  EXPECT_EQ(tile_halo_for(s), 16);
+  // A tiny α asks for more than any frame: the halo then covers the frame.
+  EXPECT_GT(tile_halo_for_alpha(1e-12), 1 << 20);
 }
 
 }  // namespace
