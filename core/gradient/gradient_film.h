@@ -58,19 +58,28 @@ struct GradientFilmBuffers {
 
 class GradientFilm {
  public:
+  // The sums are held in bands of rows, each at least this large: resolve()
+  // frees a band as soon as the rows after it no longer read it, so the
+  // buffers it writes replace the sums instead of adding to them (stage 1's
+  // peak; docs/tgpt.md "Memory").
+  static constexpr size_t kBandBytes = size_t(32) << 20;
+
   GradientFilm() = default;
-  GradientFilm(int width, int height, bool temporal = false, bool pair_primal = false)
-      : width_(width), height_(height), temporal_(temporal), pixels_(size_t(width) * height) {
-    if (pair_primal) pairs_.resize(pixels_.size());
-  }
+  GradientFilm(int width, int height, bool temporal = false, bool pair_primal = false);
 
   int width() const { return width_; }
   int height() const { return height_; }
 
   // Not thread-safe per pixel: one tile owns the pixel.
   void add(int x, int y, uint32_t sample_index, const GradientSample& s);
-  // Means over `spp` samples per pixel (sample indices 0..spp-1).
-  GradientFilmBuffers resolve(int spp) const;
+  // Means over `spp` samples per pixel (sample indices 0..spp-1). Consumes
+  // the sums: the film holds nothing afterwards (bytes() == 0).
+  GradientFilmBuffers resolve(int spp);
+
+  // The bytes of sums the film holds now, and what a film of these settings
+  // holds per pixel before resolve(): the memory accounting of stage 1.
+  size_t bytes() const;
+  static size_t bytes_per_pixel(bool temporal, bool pair_primal);
 
  private:
   struct Sums {
@@ -80,8 +89,13 @@ class GradientFilm {
     double primal_a[3] = {0, 0, 0};
     double grad_a[kOffsetCount][3] = {};
     uint32_t shifts = 0, failures = 0;
+  };
+  // Only with a temporal target (temporal_shift reconnect): kept apart, so
+  // that the passes without one (every pass of replay, G-PT) do not carry
+  // them (56 bytes a pixel beside the 272 of Sums).
+  struct TemporalSums {
     double temporal[3] = {0, 0, 0}, temporal_a[3] = {0, 0, 0};
-    uint32_t temporal_failures = 0;
+    uint32_t failures = 0;
   };
   // The pair primal's sums (allocated only when it is on): the pixel's own
   // weighted estimates summed over its existing neighbours, and per direction
@@ -90,10 +104,13 @@ class GradientFilm {
     double base[3] = {0, 0, 0}, base_a[3] = {0, 0, 0};
     double into[kOffsetCount][3] = {}, into_a[kOffsetCount][3] = {};
   };
+  Sums& sums(int x, int y) { return bands_[size_t(y / band_rows_)][size_t(y % band_rows_) * width_ + x]; }
   void resolve_pair_primal(int spp, GradientFilmBuffers* b) const;
   int width_ = 0, height_ = 0;
   bool temporal_ = false;
-  std::vector<Sums> pixels_;
+  int band_rows_ = 1;
+  std::vector<std::vector<Sums>> bands_;  // band_rows_ rows each, the last one what is left
+  std::vector<TemporalSums> temporal_sums_;
   std::vector<PairSums> pairs_;
 };
 

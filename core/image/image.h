@@ -15,6 +15,13 @@ class Image {
   Image() = default;
   Image(int width, int height, int channels) : width_(width), height_(height), channels_(channels),
       data_(size_t(width) * height * channels, 0.0f) {}
+  // Takes `data` (width × height × channels floats, row-major) as its pixels:
+  // for a producer that fills rows as it goes, touching memory only as it
+  // writes (GradientFilm::resolve), where a zeroed image would be resident at once.
+  Image(int width, int height, int channels, std::vector<float> data)
+      : width_(width), height_(height), channels_(channels), data_(std::move(data)) {
+    data_.resize(size_t(width) * height * channels, 0.0f);
+  }
 
   int width() const { return width_; }
   int height() const { return height_; }

@@ -63,5 +63,48 @@ TEST(GradientFilmTest, PairPrimalAveragesEachNeighboursPairEstimate) {
   EXPECT_TRUE(GradientFilm(3, 1).resolve(1).pair_primal.empty());  // off: not allocated
 }
 
+// Stage 1's memory accounting: the sums a film holds, the temporal ones only
+// with a temporal target, and none after resolve() (docs/tgpt.md "Memory").
+TEST(GradientFilmTest, HoldsOnlyTheSumsItNeedsAndReleasesThemOnResolve) {
+  const size_t plain = GradientFilm::bytes_per_pixel(false, false);
+  EXPECT_LE(plain, 272u);  // 33 doubles and two counts; was 328 with the temporal sums inside
+  EXPECT_GT(GradientFilm::bytes_per_pixel(true, false), plain);
+  GradientFilm film(16, 8);
+  EXPECT_EQ(film.bytes(), 16u * 8u * plain);
+  GradientFilm temporal(16, 8, /* temporal = */ true);
+  EXPECT_EQ(temporal.bytes(), 16u * 8u * GradientFilm::bytes_per_pixel(true, false));
+  film.resolve(1);
+  temporal.resolve(1);
+  EXPECT_EQ(film.bytes(), 0u);
+  EXPECT_EQ(temporal.bytes(), 0u);
+}
+
+// resolve() frees the bands of rows as it goes: dy across the border of two
+// bands still pairs the rows on either side.
+TEST(GradientFilmTest, ResolvesAcrossBandsOfRows) {
+  const int w = 4096;  // rows of 1.1 MB: bands of 31 rows at kBandBytes = 32 MiB
+  const int band_rows = int((GradientFilm::kBandBytes + w * GradientFilm::bytes_per_pixel(false, false) - 1) /
+                            (w * GradientFilm::bytes_per_pixel(false, false)));
+  const int h = 2 * band_rows + 1;
+  GradientFilm film(w, h);
+  GradientSample down, up;
+  down.gradient[size_t(OffsetDir::kDown)] = Rgb(0.25f);
+  up.gradient[size_t(OffsetDir::kUp)] = Rgb(0.5f);
+  up.primal = Rgb(2.0f);
+  for (int y : {band_rows - 1, 2 * band_rows - 1}) {
+    film.add(7, y, 0, down);
+    film.add(7, y + 1, 0, up);
+  }
+  GradientFilmBuffers out = film.resolve(1);
+  for (int y : {band_rows - 1, 2 * band_rows - 1}) {
+    EXPECT_FLOAT_EQ(out.dy.at(7, y, 0), 0.75f) << "row " << y;
+    EXPECT_FLOAT_EQ(out.primal.at(7, y + 1, 1), 2.0f) << "row " << y + 1;
+  }
+  EXPECT_FLOAT_EQ(out.dy.at(7, h - 1, 0), 0.0f);  // no constraint beyond the last row
+  EXPECT_EQ(out.dy.width(), w);
+  EXPECT_EQ(out.dy.height(), h);
+  EXPECT_EQ(film.bytes(), 0u);
+}
+
 }  // namespace
 }  // namespace gdvr
