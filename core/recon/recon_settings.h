@@ -19,6 +19,10 @@ enum class ReconMethod {
   kWeighted,  // image-space control variates, inverse-variance weights
 };
 
+// Whether `method` reads the constraints' variances (to weigh them); the
+// others only need to know which constraints a non-finite variance drops.
+inline bool uses_constraint_variances(ReconMethod method) { return method == ReconMethod::kWeighted; }
+
 // The spellings of job files and flags ("reconstruction.method", --recon).
 inline constexpr EnumNames<ReconMethod, 5> kReconMethodNames = {{{ReconMethod::kL1, "l1"},
                                                                  {ReconMethod::kL2, "l2"},

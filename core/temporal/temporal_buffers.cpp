@@ -1,5 +1,9 @@
 #include "core/temporal/temporal_buffers.h"
 
+#include <cmath>
+#include <limits>
+#include <tuple>
+
 #include <string>
 
 namespace gdvr {
@@ -155,7 +159,28 @@ Expected<Image> tgpt_frame_estimate(const LayeredImage& t, const std::string& na
   return average(a->image, b->image, variance ? 0.25f : 0.5f);
 }
 
-Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, const TemporalGradients* temporal) {
+namespace {
+
+// NaN in every channel of a pixel whose variance is not finite or negative in
+// any channel: constraint_layout.cpp drops such a constraint either way.
+void fold_variance_into_values(const Image& variance, Image* values) {
+  if (variance.data().size() != values->data().size()) return;  // none measured: nothing to drop
+  const int C = values->channels();
+  const float* var = variance.data().data();
+  float* v = values->data().data();
+  for (size_t p = 0; p < values->pixel_count(); ++p) {
+    bool good = true;
+    for (int c = 0; c < C; ++c) good &= std::isfinite(var[p * C + c]) && var[p * C + c] >= 0;
+    if (!good)
+      for (int c = 0; c < C; ++c) v[p * C + c] = std::numeric_limits<float>::quiet_NaN();
+  }
+}
+
+}  // namespace
+
+Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, TemporalGradients* temporal,
+                                            GradientVariances variances) {
+  const bool keep = variances == GradientVariances::kKeep;
   GradientFrame gf;
   const std::pair<Term, const char*> spatial[3] = {{Term::kPrimal, "primal"}, {Term::kDx, "dx"}, {Term::kDy, "dy"}};
   for (auto [term, name] : spatial) {
@@ -164,15 +189,22 @@ Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, const Tempora
     if (!v.ok()) return v.status();
     if (!var.ok()) return var.status();
     gf.buffer(term) = std::move(v.value());
-    gf.variance(term) = std::move(var.value());
+    if (keep || term == Term::kPrimal)
+      gf.variance(term) = std::move(var.value());
+    else
+      fold_variance_into_values(var.value(), &gf.buffer(term));
   }
   if (temporal) {
-    gf.buffer(Term::kDt) = temporal->dt;
-    gf.buffer(Term::kDxdt) = temporal->dxdt;
-    gf.buffer(Term::kDydt) = temporal->dydt;
-    gf.variance(Term::kDt) = temporal->dt_var;
-    gf.variance(Term::kDxdt) = temporal->dxdt_var;
-    gf.variance(Term::kDydt) = temporal->dydt_var;
+    const std::tuple<Term, Image*, Image*> terms[3] = {{Term::kDt, &temporal->dt, &temporal->dt_var},
+                                                      {Term::kDxdt, &temporal->dxdt, &temporal->dxdt_var},
+                                                      {Term::kDydt, &temporal->dydt, &temporal->dydt_var}};
+    for (auto [term, value, var] : terms) {
+      gf.buffer(term) = std::move(*value);
+      if (keep)
+        gf.variance(term) = std::move(*var);
+      else
+        fold_variance_into_values(*var, &gf.buffer(term));
+    }
     if (!temporal->valid.empty())
       for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) gf.mask(term) = temporal->valid;
   }

@@ -50,9 +50,21 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
 // from its two passes: (A + B)/2, variances (Var A + Var B)/4.
 Expected<Image> tgpt_frame_estimate(const LayeredImage& t, const std::string& name);
 
+// What tgpt_gradient_frame keeps of the gradients' variances.
+enum class GradientVariances {
+  kKeep,  // every term's variance: the weighted solver reads them
+  // Only the primal's. A gradient constraint whose variance is not finite (or
+  // negative) gets a NaN value instead, which drops it exactly as the kept
+  // variance would (core/recon/constraint_layout.cpp), counted the same. The
+  // solvers that weigh nothing by variance (l2, l1, uniform) then hold 7 RGB
+  // images per frame and pixel of a window instead of 12.
+  kFoldIntoValues,
+};
+
 // The reconstruction's view of frame t: primal, dx, dy (and variances) from
 // the buffers, plus dt, dxdt, dydt when `temporal` is given (with its mask on
-// all three temporal terms).
-Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, const TemporalGradients* temporal);
+// all three temporal terms; its images are moved from).
+Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, TemporalGradients* temporal,
+                                            GradientVariances variances = GradientVariances::kKeep);
 
 }  // namespace gdvr

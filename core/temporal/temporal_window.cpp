@@ -93,6 +93,9 @@ Expected<GradientWindow> TemporalWindowCache::gradient_window(const WindowRange&
                                  std::to_string(frames_[size_t(k)]));
     return layers;
   };
+  const GradientVariances variances = uses_constraint_variances(settings_.recon.method)
+                                          ? GradientVariances::kKeep
+                                          : GradientVariances::kFoldIntoValues;
   GradientWindow window;
   // Each frame's region is read once: frame k's is the `next` of frame k−1.
   auto cur = read(w.start);
@@ -107,9 +110,9 @@ Expected<GradientWindow> TemporalWindowCache::gradient_window(const WindowRange&
       if (!next.ok()) return next.status();
       auto tg = temporal_gradients(**cur, **next, settings_);
       if (!tg.ok()) return tg.status();
-      gf = tgpt_gradient_frame(**cur, &tg.value());
+      gf = tgpt_gradient_frame(**cur, &tg.value(), variances);
     } else {
-      gf = tgpt_gradient_frame(**cur, nullptr);
+      gf = tgpt_gradient_frame(**cur, nullptr, variances);
     }
     if (!gf.ok()) return gf.status();
     window.frames.push_back(std::make_shared<const GradientFrame>(std::move(gf.value())));
