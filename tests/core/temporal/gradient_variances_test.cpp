@@ -12,6 +12,7 @@
 #include "core/job/job_runner.h"
 #include "core/recon/reconstruct.h"
 #include "core/temporal/temporal_buffers.h"
+#include "tests/core/temporal/render_buffers.h"
 
 namespace gdvr {
 namespace {
@@ -30,16 +31,7 @@ std::map<int, FrameBuffers> moving_pair() {
   box.target = "smallbox";
   box.keys = {Keyframe{0.0, Transform()}, Keyframe{1.0, Transform::translate({-70, 0, -60})}};
   job.animation.tracks.push_back(box);
-  JobRunOptions options;
-  options.base_dir = std::string(GDVR_SOURCE_DIR) + "/scenes/demo";
-  options.threads = 2;
-  std::map<int, FrameBuffers> out;
-  Status st = render_job_buffers(job, options, {0, 6}, [&](FrameBuffers&& b) {
-    out[b.frame] = std::move(b);
-    return Status::Ok();
-  }, nullptr, nullptr);
-  EXPECT_TRUE(st.ok()) << st.to_string();
-  return out;
+  return test::render_buffers(job, std::string(GDVR_SOURCE_DIR) + "/scenes/demo", {0, 6});
 }
 
 void set(LayeredImage& L, const std::string& layer, int pixel, int channel, float v) {

@@ -13,6 +13,7 @@
 #include "core/scene/mitsuba_loader.h"
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/tgpt_frame.h"
+#include "tests/core/temporal/render_buffers.h"
 
 namespace gdvr {
 namespace {
@@ -75,16 +76,8 @@ const char* case_name(const TemporalCase& c) {
 void PrintTo(const TemporalCase& c, std::ostream* os) { *os << c.temporal_shift << "/" << case_name(c); }
 
 std::map<int, FrameBuffers> render(const JobSpec& job) {
-  JobRunOptions options;
-  options.base_dir = std::string(GDVR_SOURCE_DIR) + (job.scene == "matpreview.xml" ? "/scenes/matpreview" : "/scenes/demo");
-  options.threads = 2;
-  std::map<int, FrameBuffers> out;
-  Status st = render_job_buffers(job, options, {0, 6}, [&](FrameBuffers&& b) {
-    out[b.frame] = std::move(b);
-    return Status::Ok();
-  }, nullptr, nullptr);
-  EXPECT_TRUE(st.ok()) << st.to_string();
-  return out;
+  return test::render_buffers(
+      job, std::string(GDVR_SOURCE_DIR) + (job.scene == "matpreview.xml" ? "/scenes/matpreview" : "/scenes/demo"), {0, 6});
 }
 
 class TemporalGradientTest : public ::testing::TestWithParam<TemporalCase> {};
