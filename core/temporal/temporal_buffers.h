@@ -61,6 +61,11 @@ enum class GradientVariances {
   kFoldIntoValues,
 };
 
+// kKeep for the solver that weighs by variance, kFoldIntoValues otherwise.
+inline GradientVariances gradient_variances_for(ReconMethod method) {
+  return uses_constraint_variances(method) ? GradientVariances::kKeep : GradientVariances::kFoldIntoValues;
+}
+
 // The reconstruction's view of frame t: primal, dx, dy (and variances) from
 // the buffers, plus dt, dxdt, dydt when `temporal` is given (with its mask on
 // all three temporal terms; its images are moved from).

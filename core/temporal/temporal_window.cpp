@@ -93,9 +93,7 @@ Expected<GradientWindow> TemporalWindowCache::gradient_window(const WindowRange&
                                  std::to_string(frames_[size_t(k)]));
     return layers;
   };
-  const GradientVariances variances = uses_constraint_variances(settings_.recon.method)
-                                          ? GradientVariances::kKeep
-                                          : GradientVariances::kFoldIntoValues;
+  const GradientVariances variances = gradient_variances_for(settings_.recon.method);
   GradientWindow window;
   // Each frame's region is read once: frame k's is the `next` of frame k−1.
   auto cur = read(w.start);

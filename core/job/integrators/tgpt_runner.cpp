@@ -194,9 +194,7 @@ double TgptRunner::finalize_seconds_prior(const FrameRenderSettings& settings, i
 void TgptRunner::calibrate_window_solve(const LayeredImage& layers, FrameTimeBudget* budget) {
   solve_calibrated_ = true;
   const auto start = std::chrono::steady_clock::now();
-  auto frame = tgpt_gradient_frame(layers, nullptr,
-                                   uses_constraint_variances(settings_.recon.method) ? GradientVariances::kKeep
-                                                                                     : GradientVariances::kFoldIntoValues);
+  auto frame = tgpt_gradient_frame(layers, nullptr, gradient_variances_for(settings_.recon.method));
   if (!frame.ok()) return;  // the finalize will say what is wrong; the prior stays
   GradientWindow window;
   window.frames.push_back(std::make_shared<const GradientFrame>(std::move(frame.value())));
