@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/job/frame_denoiser.h"
 #include "core/util/status.h"
 
 #ifndef GDVR_SHIPPED_OCIO_CONFIG
@@ -65,6 +66,10 @@ struct ServerConfig {
   // (docs/tgpt.md, "Memory"). < 0: no limit.
   long long memory_limit_bytes = -1;
   std::string spill_dir;
+  // Not a flag: the denoiser server_main lends every job (Intel Open Image
+  // Denoise where the build has it; empty otherwise), for T-GPT's denoised
+  // data term (reconstruction.data_term).
+  FrameDenoiser denoiser;
 };
 
 // Parses argv; `--help` yields a kFailedPrecondition status carrying the usage.

@@ -42,6 +42,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/denoise/oidn_denoiser.h"
 #include "core/farm/buffer_store.h"
 #include "core/farm/farm_job.h"
 #include "core/farm/tile_parts.h"
@@ -117,6 +118,16 @@ Failure cmd_render(const FarmJob& job, const std::vector<int>& frames, const std
 
   JobRunOptions options = job.options;
   options.threads = threads;
+  // T-GPT's data term is made here, in stage 1: the same denoiser as
+  // gdvr-render's, so that the farm's frames equal a single process's. A
+  // worker without one renders the sampled data term (said in each frame's
+  // notes), or refuses a job that asks for "denoised".
+  if (job.spec.integrator == Integrator::kTgpt && job.spec.reconstruction.data_term != DataTerm::kSampled) {
+    std::string why;
+    options.denoiser = make_job_denoiser(threads, &why);
+    if (!options.denoiser && job.spec.reconstruction.data_term == DataTerm::kDenoised)
+      return fail(kExitFailed, "reconstruction.data_term 'denoised': " + why);
+  }
   auto on_buffers = [&](FrameBuffers&& fb) -> Status {
     GDVR_RETURN_IF_ERROR(write_buffers(job, dir, fb).with_context("frame " + std::to_string(fb.frame) + ": "));
     std::fprintf(stderr, "frame %d: %.2f s, %d spp, %.2f Mrays/s -> %s\n", fb.frame, fb.stats.render_seconds,

@@ -143,6 +143,7 @@ Status JobManager::validate(const v1::JobSpec& spec, JobSpec* core_job, std::vec
   JobRunOptions opts;
   opts.base_dir = loc->root;
   opts.asset_root = loc->root;
+  opts.denoiser = config_.denoiser;
   // ---- What will be rendered, once the scene and its params resolve ----
   auto resolved = resolve_job(*core, opts);
   if (!resolved.ok()) return resolved.status();
@@ -447,6 +448,7 @@ void JobManager::run(Job* job) {
   // The memory limit covers every running job: each gets its share.
   if (config_.memory_limit_bytes >= 0) opts.memory_limit_bytes = config_.memory_limit_bytes / config_.concurrency;
   opts.spill_dir = config_.spill_dir;
+  opts.denoiser = config_.denoiser;
   std::string dir = job_dir(job->id);
   std::error_code ec;
   fs::create_directories(dir, ec);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/denoise/oidn_denoiser.h"
 #include "core/io/atomic_file.h"
 #include "core/job/job_flags.h"
 #include "core/job/job_outputs.h"
@@ -30,6 +31,7 @@ int usage(const char* msg) {
       "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
       "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
       "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--tile-size N] [--keep-negative]\n"
+      "       [--data-term auto|sampled|denoised]\n"
       "       [--param NAME=VALUE ...] [--memory-limit MIB [--spill-dir DIR]]\n"
       "Flags override the job file; values are checked with the job (errors name the field).\n"
       "--memory-limit: tgpt's buffered frames beyond MIB MiB go to unnamed files in DIR (default: the\n"
@@ -80,6 +82,15 @@ int main(int argc, char** argv) {
     return 1;
   }
   const JobSpec job = std::move(flagged_job.value());
+  // T-GPT's default data term is denoised where this build has OIDN.
+  if (job.integrator == Integrator::kTgpt && job.reconstruction.data_term != DataTerm::kSampled) {
+    std::string why;
+    options.denoiser = make_job_denoiser(flags.threads, &why);
+    if (!options.denoiser && job.reconstruction.data_term == DataTerm::kDenoised) {
+      std::fprintf(stderr, "gdvr-render: reconstruction.data_term 'denoised': %s\n", why.c_str());
+      return 1;
+    }
+  }
 
   std::error_code ec;
   fs::create_directories(out_dir, ec);

@@ -34,8 +34,9 @@ int usage(const char* msg) {
       "usage: gdvr-report JOB.json|SCENE.xml --out DIR [--reference REF.exr|ref_%04d.exr]\n"
       "       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]\n"
       "       [--threads N] [--width W] [--height H] [--seed N] [--param NAME=VALUE ...]\n"
-      "methods: pt pt-sd pt-oidn pt-sd-oidn gpt-l1 gpt-l2 gpt-weighted tgpt-l1 tgpt-l2 (default: all that apply;\n"
-      "         pt-oidn and pt-sd-oidn need a build with Intel Open Image Denoise)\n");
+      "methods: pt pt-sd pt-oidn pt-sd-oidn gpt-l1 gpt-l2 gpt-weighted tgpt-l1 tgpt-l2 tgpt-l1-sampled\n"
+      "         (default: all that apply but tgpt-l1-sampled; pt-oidn and pt-sd-oidn need a build with Intel\n"
+      "         Open Image Denoise; the tgpt methods use it for their data term where the build has it)\n");
 }
 
 using gdvr::tools::parse_int;

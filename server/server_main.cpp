@@ -16,6 +16,7 @@
 #include "core/util/path_confinement.h"
 #include "server/auth.h"
 #include "server/call_tracker.h"
+#include "core/denoise/oidn_denoiser.h"
 #include "server/config.h"
 #include "server/health_service.h"
 #include "server/job_manager.h"
@@ -67,6 +68,12 @@ int main(int argc, char** argv) {
     return fail(parsed.status().message());
   }
   ServerConfig config = std::move(*parsed);
+  {
+    std::string why;
+    config.denoiser = gdvr::make_job_denoiser(config.threads, &why);
+    if (config.denoiser) log_event("info", "denoiser", {{"name", "Intel Open Image Denoise"}, {"use", "tgpt data term"}});
+    else log_event("info", "no_denoiser", {{"why", why}, {"effect", "tgpt's data term is the sampled primal"}});
+  }
   std::error_code ec;
   if (!fs::is_directory(config.asset_root, ec)) return fail("--asset-root: '" + config.asset_root + "' is not a folder");
   fs::create_directories(config.output_root, ec);

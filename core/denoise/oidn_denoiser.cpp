@@ -1,6 +1,7 @@
 #include "core/denoise/oidn_denoiser.h"
 
 #include <cmath>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -161,5 +162,29 @@ Expected<Image> OidnDenoiser::denoise(const DenoiseInputs& in) {
 
 OidnDenoiser::OidnDenoiser(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 OidnDenoiser::~OidnDenoiser() = default;
+
+FrameDenoiser oidn_frame_denoiser(std::shared_ptr<OidnDenoiser> denoiser) {
+  auto turn = std::make_shared<std::mutex>();
+  return [denoiser = std::move(denoiser), turn](const Image& color, const Image& albedo,
+                                                 const Image& normal) -> Expected<Image> {
+    DenoiseInputs in;
+    in.color = &color;
+    in.albedo = &albedo;
+    in.normal = &normal;
+    std::lock_guard<std::mutex> lock(*turn);
+    return denoiser->denoise(in);
+  };
+}
+
+FrameDenoiser make_job_denoiser(int threads, std::string* why) {
+  OidnDenoiserSettings settings;
+  settings.threads = threads;
+  auto d = OidnDenoiser::create(settings);
+  if (!d.ok()) {
+    if (why) *why = d.status().message();
+    return {};
+  }
+  return oidn_frame_denoiser(std::shared_ptr<OidnDenoiser>(std::move(d.value())));
+}
 
 }  // namespace gdvr

@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "core/image/image.h"
+#include "core/job/frame_denoiser.h"
 #include "core/util/status.h"
 
 namespace gdvr {
@@ -54,5 +55,14 @@ class OidnDenoiser {
   explicit OidnDenoiser(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+// A FrameDenoiser for jobs (core/job/frame_denoiser.h) on one OIDN device:
+// calls from several jobs take turns (a filter is one image at a time).
+FrameDenoiser oidn_frame_denoiser(std::shared_ptr<OidnDenoiser> denoiser);
+
+// The FrameDenoiser a program passes its jobs: OIDN's when this build has it
+// and a device can be made (with `threads` CPU threads, 0: OIDN chooses),
+// none otherwise; *why says why there is none.
+FrameDenoiser make_job_denoiser(int threads, std::string* why);
 
 }  // namespace gdvr

@@ -30,7 +30,7 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
   const bool sampling = offered.sampling && (a == "--spp" || a == "--time-budget");
   const bool integrator = offered.integrator && (a == "--integrator" || a == "--shift" || a == "--temporal-shift" ||
                                                  a == "--recon" || a == "--alpha" || a == "--window" ||
-                                                 a == "--tile-size");
+                                                 a == "--tile-size" || a == "--data-term");
   const bool common = a == "--out" || a == "--threads" || a == "--frames" || a == "--width" || a == "--height" ||
                       a == "--seed" || a == "--param" || a == "-D";
   if (offered.integrator && a == "--keep-negative") {
@@ -85,6 +85,7 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
   } else if (a == "--shift") return set_name(kShiftMappingNames, &flags->shift);
   else if (a == "--temporal-shift") return set_name(kTemporalShiftNames, &flags->temporal_shift);
   else if (a == "--recon") return set_name(kReconMethodNames, &flags->recon);
+  else if (a == "--data-term") return set_name(kDataTermNames, &flags->data_term);
   return true;
 }
 
@@ -126,6 +127,7 @@ Expected<JobSpec> job_from_flags(const JobFlags& flags, std::string* base_dir) {
   if (flags.window) job.reconstruction.window = *flags.window;
   if (flags.tile_size) job.reconstruction.tile_size = *flags.tile_size;
   if (flags.keep_negative) job.reconstruction.clamp_negative = false;
+  if (flags.data_term) job.reconstruction.data_term = *flags.data_term;
   for (const auto& [name, value] : flags.params) job.params[name] = value;
   GDVR_RETURN_IF_ERROR(validate(job));
   return job;

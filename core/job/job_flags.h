@@ -19,7 +19,7 @@ namespace gdvr::tools {
 // --threads, --frames, --width, --height, --seed and --param (-D).
 struct JobFlagSet {
   bool sampling = false;    // --spp, --time-budget
-  bool integrator = false;  // --integrator, --shift, --temporal-shift, --recon, --alpha, --window, --tile-size, --keep-negative
+  bool integrator = false;  // --integrator, --shift, --temporal-shift, --recon, --alpha, --window, --tile-size, --keep-negative, --data-term
 };
 
 struct JobFlags {
@@ -46,6 +46,7 @@ struct JobFlags {
   std::optional<int> window;
   std::optional<int> tile_size;  // --tile-size: reconstruction.tile_size
   bool keep_negative = false;  // reconstruction.clamp_negative = false
+  std::optional<DataTerm> data_term;  // --data-term: reconstruction.data_term
   std::map<std::string, std::string> params;
 };
 

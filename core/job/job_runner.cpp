@@ -12,6 +12,7 @@
 #include "core/job/integrators/integrator_runner.h"
 #include "core/job/job_validation.h"
 #include "core/render/feature_buffers.h"
+#include "core/temporal/denoised_data_term.h"
 #include "core/render/frame_scene.h"
 #include "core/scene/scene_loader.h"
 #include "core/temporal/stream_schedule.h"
@@ -56,6 +57,11 @@ Expected<std::string> resolve_scene_path(const JobSpec& job, const JobRunOptions
 
 Expected<PreparedJob> prepare_job(const JobSpec& job, const JobRunOptions& options) {
   GDVR_RETURN_IF_ERROR(validate(job));
+  // What the job asks for that this process cannot give (not the request's mistake).
+  if (job.reconstruction.data_term == DataTerm::kDenoised && !options.denoiser)
+    return failed_precondition(
+        "job.reconstruction.data_term: 'denoised' needs a denoiser, and this process has none (a build without "
+        "Intel Open Image Denoise); use 'auto' or 'sampled'");
   auto path = resolve_scene_path(job, options);
   if (!path.ok()) return path.status();
   LoadOptions load;
@@ -120,6 +126,19 @@ class JobRenderer {
     auto prepared = prepare_job(job, options);
     if (!prepared.ok()) return prepared.status();
     std::unique_ptr<JobRenderer> r(new JobRenderer(job, std::move(prepared.value()), start));
+    // T-GPT's data term: denoised when asked for or, by default, when the
+    // process has a denoiser (validate_job refused "denoised" without one).
+    const bool solves = job.integrator == Integrator::kTgpt && job.reconstruction.method != ReconMethod::kNone;
+    if (solves && job.reconstruction.data_term != DataTerm::kSampled) {
+      if (options.denoiser) {
+        r->denoised_data_term_ = true;
+        r->denoiser_ = options.denoiser;
+      } else {
+        r->pj_.scene_notes.push_back(
+            "denoised data term: this process has no denoiser (a build without Intel Open Image Denoise); the "
+            "window solve's data term is the sampled primal");
+      }
+    }
     Scene& desc = r->frame_desc_;
     desc = r->pj_.scene;
     if (!r->pj_.animation.empty())
@@ -176,6 +195,8 @@ class JobRenderer {
                                      describe_frame, control, budget_.get()};
     GDVR_RETURN_IF_ERROR(pj_.runner->render(context, frame, &out));
     for (ImageLayer& l : features.layers) out.layers.layers.push_back(std::move(l));
+    if (denoised_data_term_)
+      GDVR_RETURN_IF_ERROR(add_denoised_data_term(denoiser_, &out.layers).with_context("frame " + std::to_string(frame) + ": "));
     st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);
     st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;
     st.rays_per_second = st.render_seconds > 0 ? double(st.rays) / st.render_seconds : 0;
@@ -199,7 +220,7 @@ class JobRenderer {
                           const auto& names = feature_layer_names();
                           return std::find(names.begin(), names.end(), l) != names.end();
                         });
-    if (!wanted) return Status::Ok();
+    if (!wanted && !denoised_data_term_) return Status::Ok();  // the denoiser's guides
     auto features =
         render_feature_buffers(*scene_, pj_.render, feature_buffer_settings_for(pj_.render.spp), control.cancel);
     if (!features.ok()) return features.status();
@@ -210,6 +231,8 @@ class JobRenderer {
 
   const JobSpec& job_;
   PreparedJob pj_;
+  bool denoised_data_term_ = false;
+  FrameDenoiser denoiser_;
   std::chrono::steady_clock::time_point start_;
   Scene frame_desc_;
   std::unique_ptr<FrameScene> scene_;

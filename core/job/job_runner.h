@@ -13,6 +13,7 @@
 
 #include "core/image/image.h"
 #include "core/job/frame_output.h"
+#include "core/job/frame_denoiser.h"
 #include "core/job/job_spec.h"
 #include "core/recon/tile_grid.h"
 #include "core/util/status.h"
@@ -42,6 +43,9 @@ struct JobRunOptions {
   // "Memory"). < 0: no limit. Integrators that hold no frames ignore it.
   long long memory_limit_bytes = -1;
   std::string spill_dir;
+  // The process's denoiser, if it has one (core/job/frame_denoiser.h): T-GPT's
+  // denoised data term needs it (reconstruction.data_term).
+  FrameDenoiser denoiser;
 };
 
 struct JobCallbacks {

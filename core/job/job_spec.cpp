@@ -364,13 +364,15 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   if (j.contains("reconstruction")) {
     const json& rj = j["reconstruction"];
     std::string rp = p + ".reconstruction";
-    GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"method", "alpha", "window", "tile_size", "term_weights", "clamp_negative"}));
+    GDVR_RETURN_IF_ERROR(r.check_object(rj, rp, {"method", "alpha", "window", "tile_size", "term_weights", "clamp_negative",
+                                                     "data_term"}));
     ReconstructionSpec& rs = job.reconstruction;
     GDVR_RETURN_IF_ERROR(r.opt_name(rj, "method", rp, kReconMethodNames, &rs.method));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "alpha", rp, &rs.alpha));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "window", rp, &rs.window));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "tile_size", rp, &rs.tile_size));
     GDVR_RETURN_IF_ERROR(r.opt(rj, "clamp_negative", rp, &rs.clamp_negative));
+    GDVR_RETURN_IF_ERROR(r.opt_name(rj, "data_term", rp, kDataTermNames, &rs.data_term));
     if (rj.contains("term_weights") && !rj["term_weights"].is_null() &&
         !(rj["term_weights"].is_array() && rj["term_weights"].empty()))  // protobuf JSON: [] or absent = unset
       GDVR_RETURN_IF_ERROR(r.get_vec(rj["term_weights"], rp + ".term_weights", kTermCount, &rs.term_weights));
@@ -443,7 +445,8 @@ std::string job_to_json(const JobSpec& job) {
                          {"alpha", job.reconstruction.alpha},
                          {"window", job.reconstruction.window},
                          {"tile_size", job.reconstruction.tile_size},
-                         {"clamp_negative", job.reconstruction.clamp_negative}};
+                         {"clamp_negative", job.reconstruction.clamp_negative},
+                         {"data_term", data_term_name(job.reconstruction.data_term)}};
   if (!job.reconstruction.term_weights.empty()) j["reconstruction"]["term_weights"] = job.reconstruction.term_weights;
   j["direct_light"] = json::object();
   if (job.direct_light.strata) j["direct_light"]["strata"] = *job.direct_light.strata;

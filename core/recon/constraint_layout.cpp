@@ -137,4 +137,17 @@ Field gather_variance(const GradientWindow& window, const ConstraintLayout& layo
   return {};
 }
 
+Field gather_data_weight(const GradientWindow& window, const ConstraintLayout& layout) {
+  if (std::none_of(window.frames.begin(), window.frames.end(), [](const auto& f) { return !f->data_weight.empty(); }))
+    return {};
+  const Grid& g = layout.grid;
+  Field out(g.size(), 1.0f);
+  tbb::parallel_for(0, g.frames, [&](int t) {
+    const Image& w = window.frames[t]->data_weight;
+    if (w.empty()) return;
+    std::copy(w.data().begin(), w.data().end(), out.begin() + std::ptrdiff_t(size_t(t) * g.frame_size()));
+  });
+  return out;
+}
+
 }  // namespace gdvr

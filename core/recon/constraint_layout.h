@@ -50,5 +50,8 @@ Field gather_term(const GradientWindow& window, const ConstraintLayout& layout, 
 void gather_term(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c, Field* out);
 // Same for the variances; empty if the term has no variance buffer.
 Field gather_variance(const GradientWindow& window, const ConstraintLayout& layout, Term t, int c);
+// The frames' data weights (GradientFrame::data_weight) in planar layout, 1
+// for a frame without one; empty when no frame of the window has one.
+Field gather_data_weight(const GradientWindow& window, const ConstraintLayout& layout);
 
 }  // namespace gdvr

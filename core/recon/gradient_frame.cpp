@@ -15,6 +15,12 @@ Status GradientFrame::validate() const {
                               std::to_string(primal.height()) + "x" + std::to_string(primal.channels()));
     return Status::Ok();
   };
+  if (!data_weight.empty() && (data_weight.width() != primal.width() || data_weight.height() != primal.height() ||
+                               data_weight.channels() != 1))
+    return invalid_argument("gradient frame: data weight is " + std::to_string(data_weight.width()) + "x" +
+                            std::to_string(data_weight.height()) + "x" + std::to_string(data_weight.channels()) +
+                            ", expected " + std::to_string(primal.width()) + "x" + std::to_string(primal.height()) +
+                            "x1");
   for (Term t : kAllTerms) {
     GDVR_RETURN_IF_ERROR(check_shape(buffer(t), term_name(t)));
     GDVR_RETURN_IF_ERROR(check_shape(variance(t), std::string(term_name(t)) + "_var"));

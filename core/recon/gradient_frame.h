@@ -30,6 +30,11 @@ struct GradientFrame {
   // Per-pixel validity (width*height bytes, nonzero = keep), empty = all valid.
   // The temporal sampler drops dt/dxdt/dydt where motion vectors fail (§4).
   std::array<std::vector<uint8_t>, kTermCount> valid;
+  // Per-pixel multiplier of the primal term's weight α (one channel), empty =
+  // 1 everywhere. A denoised data term gets one (core/recon/data_term_weight.h):
+  // high where the denoised image agrees with the sampled gradients, 1 where
+  // it does not.
+  Image data_weight;
 
   Image& buffer(Term t) { return values[term_index(t)]; }
   const Image& buffer(Term t) const { return values[term_index(t)]; }

@@ -49,6 +49,11 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
     invert_diagonal(&smooth_inv_diag);
   }
 
+  // Per-pixel multipliers of α (a denoised data term's trust map); empty: none.
+  // The low-frequency correction below keeps the base α: it gives back the
+  // data term's low frequencies at the scale the gradients cannot reach.
+  const Field data_weight = gather_data_weight(window, layout);
+
   Field b, inv_diag, residual;
   for (int c = 0; c < layout.channels; ++c) {
     std::array<Field, kTermCount> d;
@@ -69,13 +74,14 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
         constraint_residuals(g, t, x.data(), d[term_index(t)], valid, &residual);
         Field& w = A.weights(t);
         const float beta = base[term_index(t)];
+        const float* scale = t == Term::kPrimal && !data_weight.empty() ? data_weight.data() : nullptr;
         const auto part = tbb::parallel_deterministic_reduce(
             tbb::blocked_range<size_t>(0, w.size(), 16384), std::pair<double, int64_t>{0.0, 0},
             [&](const tbb::blocked_range<size_t>& r, std::pair<double, int64_t> acc) {
               float local = 0;
               for (size_t i = r.begin(); i != r.end(); ++i) {
                 if (valid[i]) {
-                  w[i] = beta / (std::fabs(residual[i]) + eps);
+                  w[i] = (scale ? beta * scale[i] : beta) / (std::fabs(residual[i]) + eps);
                   local += w[i];
                   ++acc.second;
                 } else {

@@ -24,11 +24,45 @@ PoissonSystem screened_poisson_system(const ConstraintLayout& layout, const Reco
                        pack_valid_bits(layout));
 }
 
+namespace {
+
+// The same problem with the primal's weight α² scaled per pixel by the square
+// of `data_weight` (a denoised data term's trust map), in the operator's
+// float-weight mode.
+PoissonSystem weighted_screened_poisson_system(const ConstraintLayout& layout, const ReconSettings& settings,
+                                               const Field& data_weight) {
+  const double alpha2 = settings.alpha * settings.alpha * settings.term_weight(Term::kPrimal);
+  float max_dw = 1.0f;
+  for (float v : data_weight) max_dw = std::max(max_dw, v);
+  const double s = std::max(1.0, alpha2 * double(max_dw) * double(max_dw));
+  PoissonSystem A(layout.grid, layout.temporal);
+  for (Term t : kAllTerms) {
+    if (is_temporal(t) && !layout.temporal) continue;
+    const std::vector<uint8_t>& valid = layout.mask(t);
+    if (valid.empty()) continue;
+    const float w = float((t == Term::kPrimal ? alpha2 : settings.term_weight(t)) / s);
+    Field& to = A.weights(t);
+    for (size_t i = 0; i < to.size(); ++i) {
+      if (t != Term::kPrimal) {
+        to[i] = valid[i] ? w : 0.0f;
+      } else {
+        const float d = data_weight[i] * data_weight[i];
+        to[i] = valid[i] ? w * d : w * d * kDroppedPrimalWeight;
+      }
+    }
+  }
+  return A;
+}
+
+}  // namespace
+
 Status solve_screened_poisson_l2(const GradientWindow& window, const ConstraintLayout& layout,
                                  const ReconSettings& settings, ReconResult* result) {
   const Grid& g = layout.grid;
 
-  const PoissonSystem A = screened_poisson_system(layout, settings);
+  const Field data_weight = gather_data_weight(window, layout);
+  const PoissonSystem A = data_weight.empty() ? screened_poisson_system(layout, settings)
+                                              : weighted_screened_poisson_system(layout, settings, data_weight);
   Field inv_diag;
   A.diagonal(&inv_diag);
   invert_diagonal(&inv_diag);

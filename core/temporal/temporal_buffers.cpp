@@ -1,5 +1,7 @@
 #include "core/temporal/temporal_buffers.h"
 
+#include "core/temporal/denoised_data_term.h"
+
 #include <cmath>
 #include <limits>
 #include <tuple>
@@ -189,6 +191,17 @@ Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, TemporalGradi
     if (!v.ok()) return v.status();
     if (!var.ok()) return var.status();
     gf.buffer(term) = std::move(v.value());
+    // A denoised data term replaces the sampled primal in the solve, with
+    // its per-pixel trust (core/temporal/denoised_data_term.h); the sampled
+    // primal's variance stays (only the weighted method reads it).
+    if (term == Term::kPrimal) {
+      const ImageLayer* denoised = t.find(kDenoisedPrimalLayer);
+      const ImageLayer* weight = t.find(kDataWeightLayer);
+      if (denoised && weight) {
+        gf.buffer(term) = denoised->image;
+        gf.data_weight = weight->image;
+      }
+    }
     if (keep || term == Term::kPrimal)
       gf.variance(term) = std::move(var.value());
     else

@@ -20,6 +20,7 @@ extern "C" {
 
 #include <nlohmann/json.hpp>
 
+#include "core/denoise/oidn_denoiser.h"
 #include "core/io/image_io.h"
 #include "core/job/job_runner.h"
 #include "core/job/job_spec.h"
@@ -119,6 +120,8 @@ std::map<int, LayeredImage> reference(const std::string& json, const TestDir& di
   JobRunOptions opts;
   opts.base_dir = dir.assets();
   opts.asset_root = dir.assets();
+  // The server lends its jobs the build's denoiser (T-GPT's data term).
+  opts.denoiser = make_job_denoiser(0, nullptr);
   JobCallbacks cb;
   cb.on_frame_final = [&](const FrameOutput& f) { out[f.frame] = f.image; };
   Status st = run_job(*job, opts, cb, nullptr);

@@ -139,9 +139,10 @@ TEST(JobSpecTest, DefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(job->reconstruction.alpha, ReconSettings().alpha);
   EXPECT_EQ(job->reconstruction.window, TgptSettings().window);
   EXPECT_EQ(job->reconstruction.tile_size, ReconSettings().tile_size);
+  EXPECT_EQ(job->reconstruction.data_term, DataTerm::kAuto);
   const std::string text = job_to_json(*job);
   for (const char* field : {R"("integrator": "pt")", R"("shift": "reconnect")", R"("temporal_shift": "replay")",
-                            R"("method": "l1")"})
+                            R"("method": "l1")", R"("data_term": "auto")"})
     EXPECT_NE(text.find(field), std::string::npos) << field << " in\n" << text;
 }
 
@@ -164,6 +165,14 @@ TEST(JobSpecTest, NamesRoundTrip) {
                              "j")
                   ->reconstruction.method,
               n.value);
+  for (const auto& n : kDataTermNames) {
+    auto job = parse_job_json(std::string(R"({"scene": "a.xml", "integrator": "tgpt", "reconstruction": {"data_term": ")") + n.name +
+                                  "\"}}",
+                              "j");
+    ASSERT_TRUE(job.ok()) << n.name;
+    EXPECT_EQ(job->reconstruction.data_term, n.value);
+    EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->reconstruction.data_term, n.value);
+  }
 }
 
 // An unknown name is refused with the field and the names it accepts.
@@ -178,6 +187,8 @@ TEST(JobSpecTest, UnknownNamesListTheAllowedOnes) {
       {R"({"scene": "a.xml", "temporal_shift": "warp"})", "job.temporal_shift", "replay or reconnect, not 'warp'"},
       {R"({"scene": "a.xml", "reconstruction": {"method": "l3"}})", "job.reconstruction.method",
        "l1, l2, uniform, weighted or none, not 'l3'"},
+      {R"({"scene": "a.xml", "reconstruction": {"data_term": "blurred"}})", "job.reconstruction.data_term",
+       "auto, sampled or denoised, not 'blurred'"},
       {R"({"scene": "a.xml", "integrator": 3})", "job.integrator", "must be a string"},
   };
   for (const Case& c : cases) {
@@ -224,6 +235,9 @@ TEST(JobSpecTest, ValidateNamesTheField) {
   bad = job;
   bad.reconstruction.term_weights = {1, 1};
   expect_field(bad, "job.reconstruction.term_weights");
+  bad = job;  // integrator pt
+  bad.reconstruction.data_term = DataTerm::kDenoised;
+  expect_field(bad, "job.reconstruction.data_term");
   bad = job;
   bad.direct_light.edge_strata = kMaxDirectStrata + 1;
   expect_field(bad, "job.direct_light.edge_strata");
