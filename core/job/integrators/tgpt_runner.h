@@ -40,8 +40,9 @@ class TgptRunner final : public IntegratorRunner {
   // Window frames solved per frame of the shot: each frame lies in about
   // W/H windows (2 at the default overlap), fewer near the shot's ends.
   double window_frames_per_frame() const;
-  // Under a time budget: times a spatial solve of the first frame's buffers
-  // and tells the budget what the shot's window solves will cost per frame.
+  // Under a time budget: times a two-frame window solve of the first frame's
+  // buffers and tells the budget what the shot's window solves will cost per
+  // frame.
   void calibrate_window_solve(const LayeredImage& layers, FrameTimeBudget* budget);
 
   const TgptSettings settings_;
