@@ -12,9 +12,9 @@
 #include "core/job/integrators/integrator_runner.h"
 #include "core/job/job_validation.h"
 #include "core/render/feature_buffers.h"
-#include "core/temporal/denoised_data_term.h"
 #include "core/render/frame_scene.h"
 #include "core/scene/scene_loader.h"
+#include "core/temporal/denoised_data_term.h"
 #include "core/temporal/stream_schedule.h"
 #include "core/util/echo_text.h"
 #include "core/util/path_confinement.h"
@@ -128,8 +128,11 @@ class JobRenderer {
     std::unique_ptr<JobRenderer> r(new JobRenderer(job, std::move(prepared.value()), start));
     // T-GPT's data term: denoised when asked for or, by default, when the
     // process has a denoiser (validate_job refused "denoised" without one).
-    const bool solves = job.integrator == Integrator::kTgpt && job.reconstruction.method != ReconMethod::kNone;
-    if (solves && job.reconstruction.data_term != DataTerm::kSampled) {
+    // Only the screened Poisson solves (L1, L2) weigh a data term by α; the
+    // control variates combine the sampled primal with its variance.
+    const ReconMethod method = job.reconstruction.method;
+    const bool screened = method == ReconMethod::kL1 || method == ReconMethod::kL2;
+    if (job.integrator == Integrator::kTgpt && screened && job.reconstruction.data_term != DataTerm::kSampled) {
       if (options.denoiser) {
         r->denoised_data_term_ = true;
         r->denoiser_ = options.denoiser;

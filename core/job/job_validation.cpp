@@ -64,8 +64,11 @@ Status validate(const JobSpec& job) {
     if (!frames.ok()) return Status(frames.status().code(), "job.frames: " + frames.status().message());
   }
   GDVR_RETURN_IF_ERROR(validate_reconstruction(job.reconstruction));
-  if (job.reconstruction.data_term == DataTerm::kDenoised && job.integrator != Integrator::kTgpt)
-    return field_error("reconstruction.data_term", "'denoised' applies to integrator tgpt only");
+  if (job.reconstruction.data_term == DataTerm::kDenoised &&
+      (job.integrator != Integrator::kTgpt ||
+       (job.reconstruction.method != ReconMethod::kL1 && job.reconstruction.method != ReconMethod::kL2)))
+    return field_error("reconstruction.data_term",
+                       "'denoised' applies to integrator tgpt with method l1 or l2 (the screened Poisson solves)");
   GDVR_RETURN_IF_ERROR(validate_direct_light(job.direct_light));
   const std::string& codec = job.outputs.video_codec;
   if (codec != "h264" && codec != "prores" && codec != "ffv1" && codec != "none")

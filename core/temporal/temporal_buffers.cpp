@@ -1,12 +1,11 @@
 #include "core/temporal/temporal_buffers.h"
 
-#include "core/temporal/denoised_data_term.h"
-
 #include <cmath>
 #include <limits>
+#include <string>
 #include <tuple>
 
-#include <string>
+#include "core/temporal/denoised_data_term.h"
 
 namespace gdvr {
 namespace {

@@ -238,6 +238,11 @@ TEST(JobSpecTest, ValidateNamesTheField) {
   bad = job;  // integrator pt
   bad.reconstruction.data_term = DataTerm::kDenoised;
   expect_field(bad, "job.reconstruction.data_term");
+  bad.integrator = Integrator::kTgpt;  // the control variates weigh no data term
+  bad.reconstruction.method = ReconMethod::kWeighted;
+  expect_field(bad, "job.reconstruction.data_term");
+  bad.reconstruction.method = ReconMethod::kL2;
+  EXPECT_TRUE(validate(bad).ok());
   bad = job;
   bad.direct_light.edge_strata = kMaxDirectStrata + 1;
   expect_field(bad, "job.direct_light.edge_strata");
