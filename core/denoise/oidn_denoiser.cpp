@@ -33,17 +33,32 @@ Status check_inputs(const DenoiseInputs& in) {
 
 #ifdef GDVR_HAVE_OIDN
 
+// A filter for images up to this many pixels is kept for the next call (its
+// set-up costs about what a small image's denoise does); a larger one is
+// released after each, so that its scratch memory (hundreds of MB at 1080p)
+// is not held while a job does other work, such as T-GPT's window solves.
+constexpr size_t kKeepFilterPixels = size_t(1) << 20;
+
 struct OidnDenoiser::Impl {
   OIDNDevice device = nullptr;
   OIDNFilter filter = nullptr;
+  int max_memory_mb = 0;
   // What `filter` was set up for, and the images it reads and writes.
   int width = 0, height = 0;
   bool with_albedo = false, with_normal = false, clean_aux = false;
   std::vector<float> color, albedo, normal, output;
 
   ~Impl() {
-    if (filter) oidnReleaseFilter(filter);
+    release_filter();
     if (device) oidnReleaseDevice(device);
+  }
+
+  // The filter and its images, with the scratch memory OIDN keeps for them.
+  void release_filter() {
+    if (filter) oidnReleaseFilter(filter);
+    filter = nullptr;
+    width = height = 0;
+    for (std::vector<float>* v : {&color, &albedo, &normal, &output}) std::vector<float>().swap(*v);
   }
 
   // The device's first error since the last call, if any.
@@ -77,6 +92,7 @@ struct OidnDenoiser::Impl {
     share("output", output);
     oidnSetFilterBool(filter, "hdr", true);
     oidnSetFilterInt(filter, "quality", OIDN_QUALITY_HIGH);
+    if (max_memory_mb > 0) oidnSetFilterInt(filter, "maxMemoryMB", max_memory_mb);
     oidnSetFilterBool(filter, "cleanAux", clean);
     oidnCommitFilter(filter);
     Status st = device_error("setting up the RT filter");
@@ -103,6 +119,7 @@ bool OidnDenoiser::available() { return true; }
 
 Expected<std::unique_ptr<OidnDenoiser>> OidnDenoiser::create(const OidnDenoiserSettings& settings) {
   auto impl = std::make_unique<Impl>();
+  impl->max_memory_mb = settings.max_memory_mb;
   impl->device = oidnNewDevice(OIDN_DEVICE_TYPE_CPU);
   if (!impl->device) {
     const char* message = nullptr;
@@ -129,6 +146,7 @@ Expected<Image> OidnDenoiser::denoise(const DenoiseInputs& in) {
   GDVR_RETURN_IF_ERROR(impl_->device_error("denoising"));
   Image out(impl_->width, impl_->height, 3);
   out.data() = impl_->output;
+  if (size_t(impl_->width) * size_t(impl_->height) > kKeepFilterPixels) impl_->release_filter();
   return out;
 }
 
@@ -179,6 +197,7 @@ FrameDenoiser oidn_frame_denoiser(std::shared_ptr<OidnDenoiser> denoiser) {
 FrameDenoiser make_job_denoiser(int threads, std::string* why) {
   OidnDenoiserSettings settings;
   settings.threads = threads;
+  settings.max_memory_mb = kJobDenoiserMaxMemoryMB;
   auto d = OidnDenoiser::create(settings);
   if (!d.ok()) {
     if (why) *why = d.status().message();

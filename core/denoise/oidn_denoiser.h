@@ -32,7 +32,18 @@ struct DenoiseInputs {
 
 struct OidnDenoiserSettings {
   int threads = 0;  // the CPU device's numThreads; 0: OIDN chooses
+  // The filter's maxMemoryMB: above it OIDN denoises the image in tiles.
+  // 0: OIDN's default.
+  int max_memory_mb = 0;
 };
+
+// What a job's denoiser may hold. A 2-frame 1080p T-GPT job's peak RSS
+// (gdvr-render): 1.51 GB with the sampled data term, 3.11 GB with the
+// denoised one at OIDN's default, 2.50 GB at 1024, 2.11 GB at 512 (and 256),
+// for 10.8 / 10.4 / 12.1 s per frame; with the filter released after each
+// 1080p call, 1.95 GB. A 24-frame 1080p server job: docs/benchmarks.md, "The
+// service at 1080p".
+inline constexpr int kJobDenoiserMaxMemoryMB = 512;
 
 class OidnDenoiser {
  public:
