@@ -1,7 +1,8 @@
 // A denoiser a program lends its jobs. core/job links none: the programs
-// that have Intel Open Image Denoise (gdvr-render, gdvr-server, gdvr-report)
-// wrap core/denoise's OidnDenoiser in one (oidn_frame_denoiser) and pass it
-// in JobRunOptions; T-GPT's denoised data term calls it once per frame.
+// that have Intel Open Image Denoise (gdvr-render, gdvr-server, gdvr-farm,
+// gdvr-report) wrap core/denoise's OidnDenoiser in one (make_job_denoiser,
+// oidn_frame_denoiser) and pass it in JobRunOptions; T-GPT's denoised data
+// term calls it once per frame.
 #pragma once
 
 #include <functional>

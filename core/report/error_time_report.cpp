@@ -351,6 +351,7 @@ struct NoiseAccumulator {
 struct Denoising {
   OidnDenoiser* denoiser = nullptr;
   DenoiseOverhead overhead;
+  FrameDenoiser for_jobs;  // the same device, lent to T-GPT's data term
 };
 
 Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double budget, const std::vector<int>& frames,
@@ -378,15 +379,7 @@ Status run_method(const ErrorTimeReportOptions& o, const MethodSpec& m, double b
   // T-GPT's data term as a job gets it: denoised when this build has OIDN
   // (the job default), unless the method asks for the sampled one.
   if (m.sampled_data_term) job.reconstruction.data_term = DataTerm::kSampled;
-  if (m.integrator == Integrator::kTgpt && !m.sampled_data_term && denoising.denoiser) {
-    run.denoiser = [&denoising](const Image& color, const Image& albedo, const Image& normal) -> Expected<Image> {
-      DenoiseInputs in;
-      in.color = &color;
-      in.albedo = &albedo;
-      in.normal = &normal;
-      return denoising.denoiser->denoise(in);
-    };
-  }
+  if (m.integrator == Integrator::kTgpt && !m.sampled_data_term) run.denoiser = denoising.for_jobs;
 
   row->method = m.name;
   row->integrator = integrator_name(m.integrator);
@@ -744,7 +737,7 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
   // ---- Methods ----
   // OIDN's device for the denoised methods: made when one is asked for (all
   // are, by default, in a build with OIDN); a build without it offers none.
-  std::unique_ptr<OidnDenoiser> denoiser;
+  std::shared_ptr<OidnDenoiser> denoiser;
   Status denoiser_status = Status::Ok();
   std::vector<MethodSpec> methods;
   for (const MethodSpec& m : all_methods()) {
@@ -827,6 +820,7 @@ Expected<ErrorTimeReport> run_error_time_report(const ErrorTimeReportOptions& o,
   const int display_frame = frames[frames.size() / 2];
   Denoising denoising;
   denoising.denoiser = denoiser.get();
+  if (denoiser) denoising.for_jobs = oidn_frame_denoiser(denoiser);
   // The denoised baselines' fixed cost (T-GPT's data term is stage 1's own).
   if (denoiser && std::any_of(methods.begin(), methods.end(), [](const MethodSpec& m) { return m.denoised; })) {
     auto overhead = measure_denoise_overhead(o, frames.front(), denoiser.get(), cancel);
