@@ -200,6 +200,7 @@ class JobRenderer {
     for (ImageLayer& l : features.layers) out.layers.layers.push_back(std::move(l));
     if (denoised_data_term_)
       GDVR_RETURN_IF_ERROR(add_denoised_data_term(denoiser_, &out.layers).with_context("frame " + std::to_string(frame) + ": "));
+    if (budget_) pj_.runner->calibrate_stage2(out.layers, budget_.get());
     st.samples = uint64_t(st.spp) * uint64_t(pj_.render.width) * uint64_t(pj_.render.height);
     st.samples_per_second = st.render_seconds > 0 ? double(st.samples) / st.render_seconds : 0;
     st.rays_per_second = st.render_seconds > 0 ? double(st.rays) / st.render_seconds : 0;

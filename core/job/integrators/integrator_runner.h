@@ -50,6 +50,12 @@ class IntegratorRunner {
   // `frame`'s buffers into out->layers, and into out->stats what this
   // integrator measured (render_seconds, spp, rays, temporal_rays) and left out.
   virtual Status render(const FrameRenderContext& context, int frame, FrameBuffers* out) = 0;
+  // `frame`'s stage-1 layers are complete: the integrator's, the feature
+  // buffers and a denoised data term, all that its finalize will read. Under
+  // a time budget that pays stage 2, a runner whose stage 2 the budget cannot
+  // measure before the shot's end times a sample of it here (T-GPT's window
+  // solve), on the buffers it will really solve.
+  virtual void calibrate_stage2(const LayeredImage& /*layers*/, FrameTimeBudget* /*budget*/) {}
 
   // ---- Stage 2 ----
   // The frames whose buffers finalizing `frame` reads, ascending.

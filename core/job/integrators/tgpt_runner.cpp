@@ -114,8 +114,6 @@ Status TgptRunner::render(const FrameRenderContext& context, int frame, FrameBuf
   note_unused_glossy_shift(context.scene.scene(), settings_.gpt, &st);
   for (std::string& s : r.left_out) st.left_out.push_back(std::move(s));
   out->layers = tgpt_frame_layers(std::move(r));
-  if (context.budget && context.budget->pays_stage2() && !solve_calibrated_)
-    calibrate_window_solve(out->layers, context.budget);
   return Status::Ok();
 }
 
@@ -131,14 +129,13 @@ namespace {
 
 // Stage 2 of a T-GPT frame (its share of the window solves, the temporal
 // gradients, the blend) per window frame, over the same of the calibration's
-// two-frame window (the first frame's buffers twice, joined by zero temporal
-// gradients). Measured on the four animations of docs/benchmarks.md at
-// 128×128, 12 frames, L1, on a quiet machine: 0.82–1.30. A window's frames
-// no longer fit in the cache as two frames' do, so the ratio grows with the
-// machine's load; the margin above 1.3 is for that. (The calibration used to
-// time a one-frame spatial solve and multiply it by 3.5, the window-over-
-// spatial ratio measured at load 5–10: on a quiet machine that reserved
-// 2–3× what stage 2 took, 11–26 % of a 0.3 s budget.)
+// two-frame window (the first frame's finished buffers twice, joined by zero
+// temporal gradients). Measured on the four animations of docs/benchmarks.md
+// at 128×128, 12 frames, L1 with the denoised data term, budgets 0.3 and 1 s,
+// two runs each: 1.12–1.69, median 1.5. A window's frames no longer fit in
+// the cache as two frames' do. The solve of a shot's last window comes after
+// its last frame, so what this over- or underestimates is not paid back:
+// ±0.2 of the ratio is ±2 % of a 0.3 s budget at these sizes.
 constexpr double kWindowOverCalibrationCost = 1.5;
 
 // Before anything is measured (the first frame's plan only): seconds per
@@ -188,7 +185,8 @@ double TgptRunner::finalize_seconds_prior(const FrameRenderSettings& settings, i
          prior_seconds_per_pixel_frame(settings_.recon.method);
 }
 
-void TgptRunner::calibrate_window_solve(const LayeredImage& layers, FrameTimeBudget* budget) {
+void TgptRunner::calibrate_stage2(const LayeredImage& layers, FrameTimeBudget* budget) {
+  if (solve_calibrated_ || !budget || !budget->pays_stage2()) return;
   solve_calibrated_ = true;
   const auto start = std::chrono::steady_clock::now();
   auto frame = tgpt_gradient_frame(layers, nullptr, gradient_variances_for(settings_.recon.method));

@@ -28,6 +28,9 @@ class TgptRunner final : public IntegratorRunner {
   int windows_solved() const override { return windows_.windows_solved(); }
   double finalize_seconds_prior(const FrameRenderSettings& settings, int frames) const override;
   bool reads_spilled_buffers() const override { return true; }
+  // The first call times a two-frame window solve of the frame's buffers and
+  // tells the budget what the shot's window solves will cost per frame.
+  void calibrate_stage2(const LayeredImage& layers, FrameTimeBudget* budget) override;
   Expected<TileGrid> tile_grid(int width, int height) const override { return windows_.tile_grid(width, height); }
   Expected<Image> reconstruct_tiles(int frame, const std::vector<int>& tiles,
                                     const std::map<int, FrameBuffers>& buffers) override;
@@ -40,11 +43,6 @@ class TgptRunner final : public IntegratorRunner {
   // Window frames solved per frame of the shot: each frame lies in about
   // W/H windows (2 at the default overlap), fewer near the shot's ends.
   double window_frames_per_frame() const;
-  // Under a time budget: times a two-frame window solve of the first frame's
-  // buffers and tells the budget what the shot's window solves will cost per
-  // frame.
-  void calibrate_window_solve(const LayeredImage& layers, FrameTimeBudget* budget);
-
   const TgptSettings settings_;
   const bool clamp_negative_;
   TemporalWindowCache windows_;  // the job's frames, and stage 2's solved windows

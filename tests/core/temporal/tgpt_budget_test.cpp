@@ -8,7 +8,10 @@
 #include <map>
 #include <string>
 
+#include "core/job/frame_time_budget.h"
+#include "core/job/integrators/tgpt_runner.h"
 #include "core/job/job_runner.h"
+#include "core/temporal/denoised_data_term.h"
 #include "core/temporal/temporal_buffers.h"
 
 namespace gdvr {
@@ -181,6 +184,60 @@ TEST(TgptBudgetTest, TheCallersOutputIsEstimatedOnceWhereFramesWait) {
       EXPECT_EQ(asked, 0) << "pt's frames come out at once: measured, not estimated";
     }
   }
+}
+
+
+// The window solve's cost is unknown until the shot's first window is in, so
+// T-GPT times a two-frame window of the first frame's buffers, once, and only
+// when the frame is complete: the solve it times must be the one stage 2 will
+// run, denoised data term included (calibrated before that term was added,
+// it solved another problem and over-reserved up to 2x on a caustic scene).
+TEST(TgptBudgetTest, TheWindowSolveIsCalibratedOnceOnTheFinishedFrame) {
+  JobSpec job = budgeted_job("0-3", 0.3);
+  job.reconstruction.method = ReconMethod::kL1;
+  animate(&job);
+  std::map<int, FrameBuffers> buffers = render(job, {0});
+  ASSERT_EQ(buffers.count(0), 1u);
+  LayeredImage layers = buffers[0].layers;
+  // A data term as add_denoised_data_term leaves it: the image and its trust.
+  auto primal = tgpt_frame_estimate(layers, "primal");
+  ASSERT_TRUE(primal.ok()) << primal.status().to_string();
+  layers.add(kDenoisedPrimalLayer, {"R", "G", "B"}, primal.value());
+  Image ones(primal->width(), primal->height(), 1);
+  for (float& v : ones.data()) v = 1.0f;
+  layers.add(kDataWeightLayer, {"Y"}, ones);
+
+  constexpr double kPrior = 100.0;  // what the budget holds before any calibration
+  auto fresh_runner = [&] {
+    auto runner = TgptRunner::create(job, {0, 1, 2, 3});
+    EXPECT_TRUE(runner.ok()) << runner.status().to_string();
+    return std::move(runner.value());
+  };
+
+  // A render task's budget pays no stage 2: nothing is timed, and the
+  // runner can still calibrate later.
+  auto runner = fresh_runner();
+  FrameTimeBudget render_only = FrameTimeBudget::stage1_only(0.3, 4);
+  runner->calibrate_stage2(layers, &render_only);
+  EXPECT_EQ(render_only.finalize_seconds_per_frame(), 0.0);
+
+  FrameTimeBudget budget(0.3, 4, kPrior);
+  EXPECT_EQ(budget.finalize_seconds_per_frame(), kPrior);
+  runner->calibrate_stage2(layers, &budget);
+  const double calibrated = budget.finalize_seconds_per_frame();
+  EXPECT_GT(calibrated, 0.0);
+  EXPECT_LT(calibrated, kPrior) << "the measured solve replaces the prior";
+  runner->calibrate_stage2(layers, &budget);
+  EXPECT_EQ(budget.finalize_seconds_per_frame(), calibrated) << "calibrated once per job";
+
+  // The calibration reads the data term's layers: a trust map of the wrong
+  // shape makes the frame invalid, and the prior stays (stage 2 will report it).
+  LayeredImage broken = buffers[0].layers;
+  broken.add(kDenoisedPrimalLayer, {"R", "G", "B"}, primal.value());
+  broken.add(kDataWeightLayer, {"Y"}, Image(2, 2, 1));
+  FrameTimeBudget untouched(0.3, 4, kPrior);
+  fresh_runner()->calibrate_stage2(broken, &untouched);
+  EXPECT_EQ(untouched.finalize_seconds_per_frame(), kPrior);
 }
 
 }  // namespace
