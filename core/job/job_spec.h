@@ -20,16 +20,6 @@
 
 namespace gdvr {
 
-// The data term of T-GPT's window solve (docs/tgpt.md, "The denoised data
-// term"): the sampled primal, or the primal denoised with the frame's feature
-// buffers and trusted pixel by pixel as far as the sampled gradients agree
-// with it. kAuto: denoised when the process has a denoiser, sampled (and said
-// so in the frame's left-out notes) when it has none.
-enum class DataTerm { kAuto, kSampled, kDenoised };
-inline constexpr EnumNames<DataTerm, 3> kDataTermNames = {
-    {{DataTerm::kAuto, "auto"}, {DataTerm::kSampled, "sampled"}, {DataTerm::kDenoised, "denoised"}}};
-inline const char* data_term_name(DataTerm d) { return enum_name(kDataTermNames, d); }
-
 struct ReconstructionSpec {
   ReconMethod method = kDefaultJobReconMethod;
   double alpha = kDefaultReconAlpha;

@@ -39,6 +39,7 @@ GradientWindow crop_window(const GradientWindow& window, const PixelRect& rect) 
       f->variances[size_t(k)] = crop_image(frame->variances[size_t(k)], rect);
       f->valid[size_t(k)] = crop_mask(frame->valid[size_t(k)], frame->width(), rect);
     }
+    f->data_weight = crop_image(frame->data_weight, rect);
     out.frames.push_back(std::move(f));
   }
   return out;

@@ -180,7 +180,7 @@ void fold_variance_into_values(const Image& variance, Image* values) {
 }  // namespace
 
 Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, TemporalGradients* temporal,
-                                            GradientVariances variances) {
+                                            GradientVariances variances, DataTerm data_term) {
   const bool keep = variances == GradientVariances::kKeep;
   GradientFrame gf;
   const std::pair<Term, const char*> spatial[3] = {{Term::kPrimal, "primal"}, {Term::kDx, "dx"}, {Term::kDy, "dy"}};
@@ -193,12 +193,18 @@ Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, TemporalGradi
     // A denoised data term replaces the sampled primal in the solve, with
     // its per-pixel trust (core/temporal/denoised_data_term.h); the sampled
     // primal's variance stays (only the weighted method reads it).
-    if (term == Term::kPrimal) {
+    if (term == Term::kPrimal && data_term != DataTerm::kSampled) {
       const ImageLayer* denoised = t.find(kDenoisedPrimalLayer);
       const ImageLayer* weight = t.find(kDataWeightLayer);
       if (denoised && weight) {
         gf.buffer(term) = denoised->image;
         gf.data_weight = weight->image;
+      } else if (data_term == DataTerm::kDenoised) {
+        return failed_precondition(
+            std::string("data_term 'denoised': the buffers carry no denoised data term (layers '") +
+            kDenoisedPrimalLayer + "', '" + kDataWeightLayer +
+            "'): they were rendered with data_term 'sampled' or where there was no denoiser; render them again "
+            "with one, or reconstruct with data_term 'auto' or 'sampled'");
       }
     }
     if (keep || term == Term::kPrimal)

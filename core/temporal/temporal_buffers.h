@@ -68,8 +68,12 @@ inline GradientVariances gradient_variances_for(ReconMethod method) {
 
 // The reconstruction's view of frame t: primal, dx, dy (and variances) from
 // the buffers, plus dt, dxdt, dydt when `temporal` is given (with its mask on
-// all three temporal terms; its images are moved from).
+// all three temporal terms; its images are moved from). The primal is the
+// buffers' denoised data term with its trust map where they carry one and
+// `data_term` is not kSampled (TgptSettings::data_term); kDenoised on buffers
+// without one is FAILED_PRECONDITION.
 Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, TemporalGradients* temporal,
-                                            GradientVariances variances = GradientVariances::kKeep);
+                                            GradientVariances variances = GradientVariances::kKeep,
+                                            DataTerm data_term = DataTerm::kAuto);
 
 }  // namespace gdvr

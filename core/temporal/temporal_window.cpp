@@ -108,15 +108,38 @@ Expected<GradientWindow> TemporalWindowCache::gradient_window(const WindowRange&
       if (!next.ok()) return next.status();
       auto tg = temporal_gradients(**cur, **next, settings_);
       if (!tg.ok()) return tg.status();
-      gf = tgpt_gradient_frame(**cur, &tg.value(), variances);
+      gf = tgpt_gradient_frame(**cur, &tg.value(), variances, settings_.data_term);
     } else {
-      gf = tgpt_gradient_frame(**cur, nullptr, variances);
+      gf = tgpt_gradient_frame(**cur, nullptr, variances, settings_.data_term);
     }
-    if (!gf.ok()) return gf.status();
+    if (!gf.ok()) return gf.status().with_context("frame " + std::to_string(frames_[size_t(k)]) + ": ");
     window.frames.push_back(std::make_shared<const GradientFrame>(std::move(gf.value())));
     cur = std::move(next);
   }
+  GDVR_RETURN_IF_ERROR(check_one_data_term(window, w));
   return window;
+}
+
+// A window's frames must share their data term. One process renders every
+// frame with the same one, but a farm's render tasks under data_term "auto"
+// resolve it on each worker: a worker without a denoiser renders the sampled
+// term. A window of both would weigh its frames' primals by two different
+// rules (core/temporal/denoised_data_term.h), so it is refused, naming a
+// frame of each.
+Status TemporalWindowCache::check_one_data_term(const GradientWindow& window, const WindowRange& w) const {
+  int with = -1, without = -1;
+  for (int k = w.start; k < w.end; ++k) {
+    const bool denoised = !window.frames[size_t(k - w.start)]->data_weight.empty();
+    (denoised ? with : without) = frames_[size_t(k)];
+  }
+  if (with < 0 || without < 0) return Status::Ok();
+  return failed_precondition(
+      "tgpt: window of frames " + std::to_string(frames_[size_t(w.start)]) + "-" +
+      std::to_string(frames_[size_t(w.end - 1)]) + " mixes data terms: frame " + std::to_string(with) +
+      "'s buffers carry the denoised data term and frame " + std::to_string(without) +
+      "'s do not (render tasks on machines with and without a denoiser under reconstruction.data_term "
+      "'auto'); render every frame with one data term: set 'denoised' or 'sampled', or render frame " +
+      std::to_string(without) + " again where the denoiser is");
 }
 
 void TemporalWindowCache::add_to_blend(size_t window_index, int index, const Image& solved, const PixelRect& core,

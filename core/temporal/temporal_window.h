@@ -135,6 +135,9 @@ class TemporalWindowCache {
   // The window's frames cropped to `rect`, as the reconstruction sees them.
   Expected<GradientWindow> gradient_window(const WindowRange& w, const FrameRegionReader& reader,
                                            const PixelRect& rect) const;
+  // FAILED_PRECONDITION where some of the window's frames carry a denoised
+  // data term and others do not.
+  Status check_one_data_term(const GradientWindow& window, const WindowRange& w) const;
 
   TgptSettings settings_;
   std::vector<int> frames_;

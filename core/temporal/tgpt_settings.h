@@ -38,12 +38,31 @@ inline constexpr TemporalShiftMapping kDefaultTemporalShift = TemporalShiftMappi
 // Frames per reconstruction window (W): the T-GPT release's.
 inline constexpr int kDefaultWindowFrames = 20;
 
+// The data term of T-GPT's window solve (docs/tgpt.md, "The denoised data
+// term"): the sampled primal, or the primal denoised with the frame's feature
+// buffers and trusted pixel by pixel as far as the sampled gradients agree
+// with it. kAuto: denoised when the process that renders a frame has a
+// denoiser, sampled (and said so in the frame's left-out notes) when it has
+// none. Stage 1 adds the denoised term to a frame's buffers
+// (core/temporal/denoised_data_term.h); TgptSettings::data_term says what the
+// window solve reads of it.
+enum class DataTerm { kAuto, kSampled, kDenoised };
+inline constexpr EnumNames<DataTerm, 3> kDataTermNames = {
+    {{DataTerm::kAuto, "auto"}, {DataTerm::kSampled, "sampled"}, {DataTerm::kDenoised, "denoised"}}};
+inline const char* data_term_name(DataTerm d) { return enum_name(kDataTermNames, d); }
+
 struct TgptSettings {
   // The spatial sampler of both half passes (its `recon` is ignored: the
   // window solve below uses `recon`). See gpt_defaults_for().
   GptSettings gpt = gpt_defaults_for(kDefaultShiftMapping);
 
   TemporalShiftMapping temporal_shift = kDefaultTemporalShift;
+
+  // What the window solve takes as its data term (tgpt_gradient_frame):
+  // kSampled the sampled primal, even where the buffers carry a denoised
+  // term; kDenoised the denoised term, which every frame must carry; kAuto
+  // the denoised term where the window's frames carry it, all or none.
+  DataTerm data_term = DataTerm::kAuto;
 
   // ---- Motion vectors (primary-hit reprojection, docs/tgpt.md "dt and motion") ----
   // Off: every temporal constraint is kept (same-pixel dt is unbiased anyway).

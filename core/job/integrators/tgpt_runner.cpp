@@ -18,6 +18,7 @@ Expected<std::unique_ptr<TgptRunner>> TgptRunner::create(const JobSpec& job, std
   TgptSettings s;
   s.gpt = TgptSettings::gpt_defaults_for(job.shift);
   s.temporal_shift = job.temporal_shift;
+  s.data_term = job.reconstruction.data_term;
   s.recon = job_recon_settings(job.reconstruction, s.recon);
   s.window = job.reconstruction.window;
   GDVR_RETURN_IF_ERROR(s.validate().with_context("job: "));
@@ -189,7 +190,7 @@ void TgptRunner::calibrate_stage2(const LayeredImage& layers, FrameTimeBudget* b
   if (solve_calibrated_ || !budget || !budget->pays_stage2()) return;
   solve_calibrated_ = true;
   const auto start = std::chrono::steady_clock::now();
-  auto frame = tgpt_gradient_frame(layers, nullptr, gradient_variances_for(settings_.recon.method));
+  auto frame = tgpt_gradient_frame(layers, nullptr, gradient_variances_for(settings_.recon.method), settings_.data_term);
   if (!frame.ok()) return;  // the finalize will say what is wrong; the prior stays
   // A two-frame window: the solve's temporal terms and coupling, at two
   // frames' memory (what one frame cannot show).

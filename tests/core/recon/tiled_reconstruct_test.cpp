@@ -167,6 +167,30 @@ TEST(TiledReconstructTest, L1AgreesWithinSolverTolerance) {
   for (const Image& f : r.tiled.frames) EXPECT_TRUE(test::all_finite(f));
 }
 
+// A denoised data term's trust map (GradientFrame::data_weight) goes with
+// each tile: a tiled solve that dropped it would weigh the primal by α alone
+// and land far from the whole-frame solve, which the map moves.
+TEST(TiledReconstructTest, TheDataTermsTrustMapIsCroppedWithTheTiles) {
+  GradientWindow w = test::make_window(noisy_window());
+  GradientWindow mapped;
+  for (size_t t = 0; t < w.frames.size(); ++t) {
+    auto f = std::make_shared<GradientFrame>(*w.frames[t]);
+    f->data_weight = Image(f->width(), f->height(), 1);
+    for (int y = 0; y < f->height(); ++y)
+      for (int x = 0; x < f->width(); ++x) f->data_weight.at(x, y, 0) = x < f->width() / 2 ? 20.0f : 1.0f;
+    mapped.frames.push_back(std::move(f));
+  }
+  for (ReconMethod m : {ReconMethod::kL2, ReconMethod::kL1}) {
+    const Solved with_map = solve_both(mapped, tiled_settings(m));
+    const Agreement a = compare(with_map.tiled, with_map.whole);
+    EXPECT_LE(a.rel_mse_global, 1e-5) << recon_method_name(m);
+    auto without_map = reconstruct(w, tiled_settings(m));
+    ASSERT_TRUE(without_map.ok());
+    EXPECT_GT(compare(with_map.whole, without_map.value()).rel_mse_global, 100 * a.rel_mse_global)
+        << recon_method_name(m) << ": the map must matter for this test to see it dropped";
+  }
+}
+
 TEST(TiledReconstructTest, ControlVariatesAreExactWithTheirHalo) {
   // After k Jacobi sweeps a pixel depends only on pixels within k steps; the
   // halo of the control variates is at least cv_iterations.

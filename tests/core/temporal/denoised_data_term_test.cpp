@@ -145,21 +145,28 @@ TEST(DenoisedDataTermTest, AFailingDenoiserFailsTheJobWithItsMessage) {
   EXPECT_NE(nan.status.message().find("non-finite"), std::string::npos) << nan.status.message();
 }
 
+// Stage-1 buffers of `frames` as a farm's render task makes them, with or
+// without a denoiser.
+Status render_buffers(const JobSpec& job, FrameDenoiser denoiser, const std::vector<int>& frames,
+                      std::map<int, FrameBuffers>* out) {
+  JobRunOptions options;
+  options.base_dir = demo_dir();
+  options.threads = 2;
+  options.denoiser = std::move(denoiser);
+  return render_job_buffers(job, options, frames,
+                            [&](FrameBuffers&& b) {
+                              (*out)[b.frame] = std::move(b);
+                              return Status::Ok();
+                            },
+                            nullptr, nullptr);
+}
+
 // The two layers travel with the frame's stage-1 buffers (as a farm's
 // render task writes them): the data term and its one-channel trust map.
 TEST(DenoisedDataTermTest, StageOneBuffersCarryTheDataTermLayers) {
   std::atomic<int> calls{0};
-  JobRunOptions options;
-  options.base_dir = demo_dir();
-  options.threads = 2;
-  options.denoiser = box_blur(&calls);
   std::map<int, FrameBuffers> out;
-  Status st = render_job_buffers(tgpt_job(DataTerm::kDenoised), options, {0, 1},
-                                 [&](FrameBuffers&& b) {
-                                   out[b.frame] = std::move(b);
-                                   return Status::Ok();
-                                 },
-                                 nullptr, nullptr);
+  Status st = render_buffers(tgpt_job(DataTerm::kDenoised), box_blur(&calls), {0, 1}, &out);
   ASSERT_TRUE(st.ok()) << st.to_string();
   ASSERT_EQ(out.size(), 2u);
   for (const auto& [f, b] : out) {
@@ -170,6 +177,69 @@ TEST(DenoisedDataTermTest, StageOneBuffersCarryTheDataTermLayers) {
     EXPECT_EQ(w->image.channels(), 1);
     for (float v : w->image.data()) EXPECT_TRUE(v >= 1.0f && v <= 20.0f) << v;
   }
+}
+
+// A farm under data_term "auto" resolves it on each render machine: frames
+// from a machine without a denoiser carry the sampled term. A window of both
+// is refused with what to do, rather than solved under two rules.
+TEST(DenoisedDataTermTest, AWindowOfMixedDataTermsIsRefusedNamingAFrameOfEach) {
+  const JobSpec job = tgpt_job(DataTerm::kAuto);
+  std::atomic<int> calls{0};
+  std::map<int, FrameBuffers> buffers;
+  ASSERT_TRUE(render_buffers(job, box_blur(&calls), {0, 1}, &buffers).ok());
+  ASSERT_TRUE(render_buffers(job, nullptr, {2, 3}, &buffers).ok());
+  ASSERT_EQ(buffers.size(), 4u);
+  auto finalizer = JobFinalizer::create(job);
+  ASSERT_TRUE(finalizer.ok()) << finalizer.status().to_string();
+  auto mixed = finalizer.value()->finalize(0, buffers);
+  ASSERT_FALSE(mixed.ok());
+  EXPECT_EQ(mixed.status().code(), StatusCode::kFailedPrecondition);
+  const std::string& why = mixed.status().message();
+  EXPECT_NE(why.find("mixes data terms"), std::string::npos) << why;
+  EXPECT_NE(why.find("frame 1's buffers carry the denoised data term"), std::string::npos) << why;
+  EXPECT_NE(why.find("frame 3's do not"), std::string::npos) << why;
+
+  // The same frames all rendered with the denoiser finalize.
+  ASSERT_TRUE(render_buffers(job, box_blur(&calls), {2, 3}, &buffers).ok());
+  auto again = JobFinalizer::create(job);
+  ASSERT_TRUE(again.ok());
+  auto one = again.value()->finalize(0, buffers);
+  ASSERT_TRUE(one.ok()) << one.status().to_string();
+  expect_finite(one.value());
+}
+
+// The data term is chosen again where the window is solved: a job that asks
+// for the sampled one ignores a denoised term in its buffers (a farm's
+// buffers re-finalized to compare), and one that asks for the denoised term
+// refuses buffers without it rather than silently solving the sampled one.
+TEST(DenoisedDataTermTest, TheSolveReadsTheDataTermTheJobAsksFor) {
+  std::atomic<int> calls{0};
+  std::map<int, FrameBuffers> denoised, sampled;
+  ASSERT_TRUE(render_buffers(tgpt_job(DataTerm::kAuto), box_blur(&calls), {0, 1, 2, 3}, &denoised).ok());
+  ASSERT_TRUE(render_buffers(tgpt_job(DataTerm::kAuto), nullptr, {0, 1, 2, 3}, &sampled).ok());
+  ASSERT_TRUE(denoised.at(0).layers.find(kDenoisedPrimalLayer));
+  ASSERT_FALSE(sampled.at(0).layers.find(kDenoisedPrimalLayer));
+  auto finalize = [](DataTerm term, const std::map<int, FrameBuffers>& buffers) {
+    auto finalizer = JobFinalizer::create(tgpt_job(term));
+    EXPECT_TRUE(finalizer.ok()) << finalizer.status().to_string();
+    return finalizer.value()->finalize(0, buffers);
+  };
+  auto ignored = finalize(DataTerm::kSampled, denoised);
+  auto plain = finalize(DataTerm::kSampled, sampled);
+  auto used = finalize(DataTerm::kAuto, denoised);
+  ASSERT_TRUE(ignored.ok()) << ignored.status().to_string();
+  ASSERT_TRUE(plain.ok()) << plain.status().to_string();
+  ASSERT_TRUE(used.ok()) << used.status().to_string();
+  const Image& a = ignored->image.layers.front().image;
+  EXPECT_EQ(a.data(), plain->image.layers.front().image.data()) << "'sampled' must not read the denoised layers";
+  EXPECT_NE(a.data(), used->image.layers.front().image.data()) << "'auto' reads them";
+
+  auto missing = finalize(DataTerm::kDenoised, sampled);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_EQ(missing.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(missing.status().message().find("frame 0: "), std::string::npos) << missing.status().message();
+  EXPECT_NE(missing.status().message().find("carry no denoised data term"), std::string::npos)
+      << missing.status().message();
 }
 
 }  // namespace
