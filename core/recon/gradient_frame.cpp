@@ -1,5 +1,7 @@
 #include "core/recon/gradient_frame.h"
 
+#include <cmath>
+
 namespace gdvr {
 
 Status GradientFrame::validate() const {
@@ -21,6 +23,18 @@ Status GradientFrame::validate() const {
                             std::to_string(data_weight.height()) + "x" + std::to_string(data_weight.channels()) +
                             ", expected " + std::to_string(primal.width()) + "x" + std::to_string(primal.height()) +
                             "x1");
+  if (!temporal_target.empty()) {
+    if (temporal_target.width() != primal.width() || temporal_target.height() != primal.height() ||
+        temporal_target.channels() != 2)
+      return invalid_argument("gradient frame: temporal target is " + std::to_string(temporal_target.width()) + "x" +
+                              std::to_string(temporal_target.height()) + "x" +
+                              std::to_string(temporal_target.channels()) + ", expected " +
+                              std::to_string(primal.width()) + "x" + std::to_string(primal.height()) + "x2");
+    for (float v : temporal_target.data())
+      if (!(std::fabs(v) <= 1e6f) || v != std::round(v))
+        return invalid_argument("gradient frame: temporal target offsets must be whole pixels, found " +
+                                std::to_string(v));
+  }
   for (Term t : kAllTerms) {
     GDVR_RETURN_IF_ERROR(check_shape(buffer(t), term_name(t)));
     GDVR_RETURN_IF_ERROR(check_shape(variance(t), std::string(term_name(t)) + "_var"));

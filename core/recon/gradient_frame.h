@@ -35,6 +35,16 @@ struct GradientFrame {
   // high where the denoised image agrees with the sampled gradients, 1 where
   // it does not.
   Image data_weight;
+  // Where the temporal constraints of pixel p land in the next frame (two
+  // channels X, Y of whole-pixel offsets o(p), +x right, +y down), empty = the
+  // same pixel everywhere. With it the temporal terms follow the motion
+  // (docs/reconstruction.md, "Motion-compensated temporal terms"):
+  //   dt_t(p) ≈ I_{t+1}(p + o) − I_t(p),  dxdt_t(p) ≈ dx_{t+1}(p + o) − dx_t(p),
+  //   dydt_t(p) ≈ dy_{t+1}(p + o) − dy_t(p).
+  // A constraint whose target lies outside the image is dropped, and so is
+  // every constraint after the first (in scan order) that lands on a pixel
+  // another one of the frame already lands on.
+  Image temporal_target;
 
   Image& buffer(Term t) { return values[term_index(t)]; }
   const Image& buffer(Term t) const { return values[term_index(t)]; }
