@@ -32,6 +32,8 @@ ConstraintLayout build_constraint_layout(const GradientWindow& window, const Pix
   L.channels = window.channels();
   const Grid& g = L.grid;
   const int C = L.channels;
+  L.targets = build_temporal_targets(window);
+  const bool follows_motion = !L.targets.empty();
   for (Term term : kAllTerms) {
     const int k = term_index(term);
     bool any_buffer = false;
@@ -57,6 +59,20 @@ ConstraintLayout build_constraint_layout(const GradientWindow& window, const Pix
           if (!user.empty() && !user[p]) {
             mk += count;
             continue;
+          }
+          if (follows_motion && is_temporal(term)) {
+            const size_t i = g.index(x, y, t);
+            if (!L.targets.lands(i)) {
+              mk += count;
+              continue;
+            }
+            // The target's own right / lower neighbour must exist too.
+            const int64_t q = int64_t(p) + L.targets.next_offset[i];
+            if ((uses_x_neighbour(term) && q % g.width == g.width - 1) ||
+                (uses_y_neighbour(term) && q / g.width == g.height - 1)) {
+              mk += count;
+              continue;
+            }
           }
           bool finite = true;
           for (int c = 0; c < C; ++c) {

@@ -14,6 +14,7 @@
 #include "core/image/pixel_rect.h"
 #include "core/recon/grid.h"
 #include "core/recon/gradient_window.h"
+#include "core/recon/temporal_targets.h"
 
 namespace gdvr {
 
@@ -26,6 +27,10 @@ struct ConstraintLayout {
   std::array<int64_t, kTermCount> non_finite{};
   std::array<int64_t, kTermCount> masked{};
   bool temporal = false;  // any temporal constraint survives
+  // Where the temporal constraints land in the next frame; empty: the same
+  // pixel (GradientFrame::temporal_target). A constraint whose target does not
+  // exist is dropped and counted in `masked`.
+  TemporalTargets targets;
 
   bool present(Term t) const { return !valid[term_index(t)].empty(); }
   const std::vector<uint8_t>& mask(Term t) const { return valid[term_index(t)]; }

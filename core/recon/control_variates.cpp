@@ -89,6 +89,13 @@ Status solve_control_variates(const GradientWindow& window, const ConstraintLayo
               num += w * (x[nb] + sign * d[k][j]);
               den += w;
             };
+            if (t == Term::kDt && !layout.targets.empty()) {
+              // dt links i to its target in the next frame (temporal_targets.h).
+              const TemporalTargets& to = layout.targets;
+              if (valid[i]) add(i, size_t(int64_t(i) + int64_t(st) + to.next_offset[i]), -1.0);
+              if (const int32_t k = to.prev_source[i]; k >= 0 && valid[size_t(k)]) add(size_t(k), size_t(k), +1.0);
+              continue;
+            }
             if (valid[i]) add(i, i + s, -1.0);
             if (i >= s && valid[i - s]) add(i - s, i - s, +1.0);
           }

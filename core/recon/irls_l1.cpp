@@ -29,6 +29,7 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
   const Grid& g = layout.grid;
   const bool temporal = layout.temporal;
   PoissonSystem A(g, temporal);
+  A.follow_temporal_targets(&layout.targets);
   // Same scaling argument as the L2 solver: divide by max(1, α) so the base
   // weights stay ≤ 1 whatever α is; IRLS weights are then ≤ 1/ε_k.
   const double alpha = settings.alpha * settings.term_weight(Term::kPrimal);
@@ -71,7 +72,7 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
       int64_t count = 0;
       for (Term t : active) {
         const std::vector<uint8_t>& valid = layout.mask(t);
-        constraint_residuals(g, t, x.data(), d[term_index(t)], valid, &residual);
+        constraint_residuals(g, t, x.data(), d[term_index(t)], valid, &residual, &layout.targets);
         Field& w = A.weights(t);
         const float beta = base[term_index(t)];
         const float* scale = t == Term::kPrimal && !data_weight.empty() ? data_weight.data() : nullptr;

@@ -93,7 +93,7 @@ double PoissonSystem::apply(const float* p, float* q) const {
     l.p = p + row * W;
     l.q = q + row * W;
     l.width = g.width;
-    l.temporal = temporal_;
+    l.temporal = stencil_temporal();
     l.masked = masked_;
     if (masked_) {
       l.mask[0] = mrow(t, y);
@@ -113,7 +113,7 @@ double PoissonSystem::apply(const float* p, float* q) const {
       w[1] = wrow(Term::kDx, t, y);
       w[2] = wrow(Term::kDy, t, y);
       w[3] = wrow(Term::kDy, t, y - 1);
-      if (temporal_) {
+      if (l.temporal) {
         w[4] = wrow(Term::kDt, t, y);
         w[5] = wrow(Term::kDt, t - 1, y);
         w[6] = wrow(Term::kDxdt, t, y);
@@ -132,7 +132,7 @@ double PoissonSystem::apply(const float* p, float* q) const {
   // pixel measured), so that mode keeps one line per unit.
   const bool blocked = masked_;
   const int units = blocked ? (g.height + kBlockRows - 1) / kBlockRows : g.rows();
-  return tbb::parallel_deterministic_reduce(
+  const double stencil = tbb::parallel_deterministic_reduce(
       tbb::blocked_range<int>(0, units, blocked ? 1 : row_grain()), 0.0,
       [&](const tbb::blocked_range<int>& range, double acc) {
         std::vector<uint8_t> uniform;
@@ -147,6 +147,44 @@ double PoissonSystem::apply(const float* p, float* q) const {
               acc += line(t, y, uniform);
         }
         return acc;
+      },
+      std::plus<double>());
+  return follows_motion() ? stencil + apply_temporal_targets_part(p, q) : stencil;
+}
+
+void PoissonSystem::follow_temporal_targets(const TemporalTargets* targets) {
+  temporal_targets_ = targets && !targets->empty() && temporal_ ? targets : nullptr;
+  if (!temporal_targets_) return;
+  for (Field& f : temporal_scratch_) f.resize(grid_.size());
+  adjoint_scratch_.resize(grid_.size());
+}
+
+template <typename Value>
+void PoissonSystem::weighted_temporal_values(Value&& value) const {
+  const auto scale = [&](int k, size_t i) -> float {
+    if (!masked_) return w_[k][i];
+    return ((bits_[i] >> k) & 1) ? term_w_[k] : 0.0f;
+  };
+  value(scale, temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data());
+}
+
+double PoissonSystem::apply_temporal_targets_part(const float* p, float* q) const {
+  const Grid g = grid_;
+  weighted_temporal_values([&](auto&& scale, float* dt, float* dxdt, float* dydt) {
+    apply_temporal_targets(g, *temporal_targets_, p, scale, dt, dxdt, dydt);
+  });
+  const TemporalTermValues h{temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data()};
+  float* qw = adjoint_scratch_.data();
+  temporal_targets_adjoint(g, *temporal_targets_, h, /*absolute=*/false, /*accumulate=*/false, qw);
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), 0.0,
+      [&](const tbb::blocked_range<size_t>& r, double acc) {
+        float local = 0;
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          q[i] += qw[i];
+          local += p[i] * qw[i];
+        }
+        return acc + local;
       },
       std::plus<double>());
 }
@@ -199,14 +237,33 @@ void PoissonSystem::rhs_masked(const std::array<const Field*, kTermCount>& targe
 #pragma GCC ivdep
         for (int x = 1; x < g.width; ++x) at(temporal, x, x - 1, 1.0f);
       };
-      if (temporal_) line(std::true_type{});
+      if (stencil_temporal()) line(std::true_type{});
       else line(std::false_type{});
     }
   });
 }
 
 void PoissonSystem::rhs(const std::array<const Field*, kTermCount>& targets, Field* b) const {
-  if (masked_) return rhs_masked(targets, b);
+  if (masked_) rhs_masked(targets, b);
+  else rhs_stencil(targets, b);
+  if (!follows_motion()) return;
+  // b += Σ Hᵀ W d over the motion-following temporal terms.
+  const Grid g = grid_;
+  const Field* d[3] = {targets[term_index(Term::kDt)], targets[term_index(Term::kDxdt)],
+                       targets[term_index(Term::kDydt)]};
+  weighted_temporal_values([&](auto&& scale, float* dt, float* dxdt, float* dydt) {
+    float* out[3] = {dt, dxdt, dydt};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& r) {
+      for (int k = 0; k < 3; ++k)
+        for (size_t i = r.begin(); i != r.end(); ++i)
+          out[k][i] = d[k] ? scale(term_index(Term::kDt) + k, i) * (*d[k])[i] : 0.0f;
+    });
+  });
+  const TemporalTermValues h{temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data()};
+  temporal_targets_adjoint(g, *temporal_targets_, h, /*absolute=*/false, /*accumulate=*/true, b->data());
+}
+
+void PoissonSystem::rhs_stencil(const std::array<const Field*, kTermCount>& targets, Field* b) const {
   const Grid g = grid_;
   b->resize(g.size());  // every element is written below
   const size_t sx = 1, sy = size_t(g.width), st = g.frame_size();
@@ -225,7 +282,7 @@ void PoissonSystem::rhs(const std::array<const Field*, kTermCount>& targets, Fie
         if (x > 0) s += v(Term::kDx, i - sx);
         s -= v(Term::kDy, i);
         if (y > 0) s += v(Term::kDy, i - sy);
-        if (temporal_) {
+        if (stencil_temporal()) {
           s -= v(Term::kDt, i);
           if (t > 0) s += v(Term::kDt, i - st);
           s += v(Term::kDxdt, i);
@@ -256,7 +313,7 @@ void PoissonSystem::diagonal(Field* d) const {
         float s = w(Term::kPrimal, i) + w(Term::kDx, i) + w(Term::kDy, i);
         if (x > 0) s += w(Term::kDx, i - sx);
         if (y > 0) s += w(Term::kDy, i - sy);
-        if (temporal_) {
+        if (stencil_temporal()) {
           s += w(Term::kDt, i) + w(Term::kDxdt, i) + w(Term::kDydt, i);
           if (t > 0) s += w(Term::kDt, i - st) + w(Term::kDxdt, i - st) + w(Term::kDydt, i - st);
           if (x > 0) s += w(Term::kDxdt, i - sx);
@@ -268,12 +325,31 @@ void PoissonSystem::diagonal(Field* d) const {
       }
     }
   });
+  if (!follows_motion()) return;
+  // Every coefficient of a temporal constraint is ±1: its weight adds to the
+  // diagonal at each pixel it touches.
+  weighted_temporal_values([&](auto&& scale, float* dt, float* dxdt, float* dydt) {
+    float* out[3] = {dt, dxdt, dydt};
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& r) {
+      for (int k = 0; k < 3; ++k)
+        for (size_t i = r.begin(); i != r.end(); ++i) out[k][i] = scale(term_index(Term::kDt) + k, i);
+    });
+  });
+  const TemporalTermValues h{temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data()};
+  temporal_targets_adjoint(g, *temporal_targets_, h, /*absolute=*/true, /*accumulate=*/true, d->data());
 }
 
 void constraint_residuals(const Grid& g, Term term, const float* x, const Field& target,
-                          const std::vector<uint8_t>& valid, Field* r) {
+                          const std::vector<uint8_t>& valid, Field* r, const TemporalTargets* targets) {
   r->assign(g.size(), 0.0f);
   if (valid.empty()) return;
+  if (is_temporal(term) && targets && !targets->empty()) {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t i = range.begin(); i != range.end(); ++i)
+        if (valid[i]) (*r)[i] = temporal_target_difference(g, *targets, term, x, i) - target[i];
+    });
+    return;
+  }
   const size_t sx = 1, sy = size_t(g.width), st = g.frame_size();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i != range.end(); ++i) {

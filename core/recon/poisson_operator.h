@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/recon/grid.h"
+#include "core/recon/temporal_targets.h"
 #include "core/recon/term.h"
 
 namespace gdvr {
@@ -50,11 +51,25 @@ class PoissonSystem {
   // diag(A), for the Jacobi preconditioner.
   void diagonal(Field* d) const;
 
+  // The temporal terms link each pixel to its target in the next frame
+  // (core/recon/temporal_targets.h) instead of to the same pixel; `targets`
+  // (the layout's) must outlive the system. Empty targets keep the stencil.
+  void follow_temporal_targets(const TemporalTargets* targets);
+
   // The rows of grid, split into TBB ranges of about `kChunkPixels` pixels.
   int row_grain() const;
 
  private:
   void rhs_masked(const std::array<const Field*, kTermCount>& targets, Field* b) const;
+  void rhs_stencil(const std::array<const Field*, kTermCount>& targets, Field* b) const;
+  bool follows_motion() const { return temporal_targets_ != nullptr; }
+  // Whether the 3×3×3 stencil carries the temporal terms (it does unless they follow motion).
+  bool stencil_temporal() const { return temporal_ && !follows_motion(); }
+  // Adds the motion-following temporal terms' part of A p to q; returns its p·(A p).
+  double apply_temporal_targets_part(const float* p, float* q) const;
+  // h_term = w_term · v_term per temporal constraint, into the scratch fields.
+  template <typename Value>
+  void weighted_temporal_values(Value&& value) const;
   // Weight of constraint t at pixel i in either mode (setup passes only).
   float weight_at(Term t, size_t i) const {
     const int k = term_index(t);
@@ -75,10 +90,16 @@ class PoissonSystem {
   // Per line (t, y) and span of columns: the mask is constant over the columns
   // that span's stencil reads (ConstWeights apply); all ones for outside lines.
   std::vector<uint8_t> uniform_spans_, all_uniform_;
+  const TemporalTargets* temporal_targets_ = nullptr;
+  // Per-constraint scratch of the motion-following terms (dt, dxdt, dydt) and
+  // their adjoint; apply() is called by one CG at a time.
+  mutable std::array<Field, 3> temporal_scratch_;
+  mutable Field adjoint_scratch_;
 };
 
-// (H_t x)(p) − d(p) for every valid constraint of term t (0 elsewhere).
+// (H_t x)(p) − d(p) for every valid constraint of term t (0 elsewhere); the
+// temporal terms follow `targets` when it is given and not empty.
 void constraint_residuals(const Grid& grid, Term t, const float* x, const Field& target,
-                          const std::vector<uint8_t>& valid, Field* r);
+                          const std::vector<uint8_t>& valid, Field* r, const TemporalTargets* targets = nullptr);
 
 }  // namespace gdvr

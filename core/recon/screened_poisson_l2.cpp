@@ -20,8 +20,10 @@ PoissonSystem screened_poisson_system(const ConstraintLayout& layout, const Reco
   for (Term t : kAllTerms)
     if (!is_temporal(t) || layout.temporal)
       w[term_index(t)] = float((t == Term::kPrimal ? alpha2 : settings.term_weight(t)) / s);
-  return PoissonSystem(layout.grid, layout.temporal, w, w[term_index(Term::kPrimal)] * kDroppedPrimalWeight,
-                       pack_valid_bits(layout));
+  PoissonSystem A(layout.grid, layout.temporal, w, w[term_index(Term::kPrimal)] * kDroppedPrimalWeight,
+                  pack_valid_bits(layout));
+  A.follow_temporal_targets(&layout.targets);
+  return A;
 }
 
 namespace {
@@ -36,6 +38,7 @@ PoissonSystem weighted_screened_poisson_system(const ConstraintLayout& layout, c
   for (float v : data_weight) max_dw = std::max(max_dw, v);
   const double s = std::max(1.0, alpha2 * double(max_dw) * double(max_dw));
   PoissonSystem A(layout.grid, layout.temporal);
+  A.follow_temporal_targets(&layout.targets);
   for (Term t : kAllTerms) {
     if (is_temporal(t) && !layout.temporal) continue;
     const std::vector<uint8_t>& valid = layout.mask(t);

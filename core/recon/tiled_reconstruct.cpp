@@ -40,6 +40,9 @@ GradientWindow crop_window(const GradientWindow& window, const PixelRect& rect) 
       f->valid[size_t(k)] = crop_mask(frame->valid[size_t(k)], frame->width(), rect);
     }
     f->data_weight = crop_image(frame->data_weight, rect);
+    // Offsets are relative, so they crop as they are; a target outside the
+    // tile drops its constraints (build_temporal_targets).
+    f->temporal_target = crop_image(frame->temporal_target, rect);
     out.frames.push_back(std::move(f));
   }
   return out;

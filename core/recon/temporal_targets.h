@@ -1,0 +1,87 @@
+// Motion-compensated temporal constraints (Manzi et al. 2016, §4;
+// docs/reconstruction.md, "Motion-compensated temporal terms"): the temporal
+// terms of pixel p of frame t link it to pixel j(p) = p + o(p) of frame t+1
+// instead of to p itself,
+//
+//   (H_dt x)(p)   = x_{t+1}(j) − x_t(p)
+//   (H_dxdt x)(p) = [x_{t+1}(j + e_x) − x_{t+1}(j)] − [x_t(p + e_x) − x_t(p)]
+//   (H_dydt x)(p) = [x_{t+1}(j + e_y) − x_{t+1}(j)] − [x_t(p + e_y) − x_t(p)].
+//
+// The map p → j is one to one (build_temporal_targets drops the later of two
+// sources that land on one pixel), so every pixel of frame t+1 is the target of
+// at most one constraint: Hᵀ is then a gather (each pixel reads the few
+// constraints that touch it), parallel and deterministic like the stencil of
+// the same-pixel terms, which core/recon/poisson_operator.cpp keeps for
+// windows without motion.
+#pragma once
+
+#include <climits>
+#include <cstdint>
+#include <vector>
+
+#include "core/recon/grid.h"
+#include "core/recon/term.h"
+
+namespace gdvr {
+
+struct TemporalTargets {
+  // Planar over the window's grid. next_offset[i]: the target of pixel i of
+  // frame t is i + frame_size + next_offset[i] (a pixel of frame t+1).
+  // prev_source[i]: the pixel of frame t−1 whose constraints land on pixel i,
+  // or −1. Empty: every temporal constraint links the same pixel.
+  std::vector<int32_t> next_offset;
+  std::vector<int32_t> prev_source;
+
+  bool empty() const { return next_offset.empty(); }
+  // next_offset of a pixel without a target (outside the image, another
+  // source landed there first, or the window's last frame).
+  static constexpr int32_t kNone = INT32_MIN;
+  bool lands(size_t i) const { return next_offset[i] != kNone; }
+};
+
+struct GradientWindow;
+// The window's map, from each frame's GradientFrame::temporal_target (frames
+// without one link the same pixel; pixels whose temporal terms are all masked
+// link nothing); empty when every offset of frames
+// 0..W−2 is zero, so windows without motion keep the stencil.
+TemporalTargets build_temporal_targets(const GradientWindow& window);
+
+// Per-constraint values of the three temporal terms, planar (0 where a term
+// has no constraint). The operator's passes work on these.
+struct TemporalTermValues {
+  const float* dt = nullptr;
+  const float* dxdt = nullptr;
+  const float* dydt = nullptr;
+};
+
+// h_term(i) = scale_term(i) · (H_term x)(i) at every pixel where scale_term(i)
+// ≠ 0 (and 0 elsewhere): scale is a per-constraint weight, 0 where the
+// constraint does not exist, which must hold wherever a target would leave the
+// grid. `scale(term_index, i)` is called once per pixel and term.
+template <typename Scale>
+void apply_temporal_targets(const Grid& g, const TemporalTargets& targets, const float* x, Scale&& scale,
+                            float* h_dt, float* h_dxdt, float* h_dydt);
+
+// out(i) = Σ over the temporal constraints touching pixel i of c·h(constraint),
+// with c the coefficient of x(i) in that constraint (±1), or |c| = 1 when
+// `absolute` (the diagonal of Hᵀ W H is the adjoint of the weights with
+// absolute coefficients). `out` is added to when `accumulate`, else assigned.
+void temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const TemporalTermValues& h,
+                              bool absolute, bool accumulate, float* out);
+
+// (H_term x)(i) for one temporal term at pixel i (the constraint must exist).
+inline float temporal_target_difference(const Grid& g, const TemporalTargets& targets, Term term, const float* x,
+                                        size_t i) {
+  const size_t j = size_t(int64_t(i) + int64_t(g.frame_size()) + targets.next_offset[i]);
+  const size_t sx = 1, sy = size_t(g.width);
+  switch (term) {
+    case Term::kDt: return x[j] - x[i];
+    case Term::kDxdt: return (x[j + sx] - x[j]) - (x[i + sx] - x[i]);
+    case Term::kDydt: return (x[j + sy] - x[j]) - (x[i + sy] - x[i]);
+    default: return 0.0f;
+  }
+}
+
+}  // namespace gdvr
+
+#include "core/recon/temporal_targets.inl"
