@@ -154,39 +154,34 @@ double PoissonSystem::apply(const float* p, float* q) const {
 
 void PoissonSystem::follow_temporal_targets(const TemporalTargets* targets) {
   temporal_targets_ = targets && !targets->empty() && temporal_ ? targets : nullptr;
-  if (!temporal_targets_) return;
-  for (Field& f : temporal_scratch_) f.resize(grid_.size());
-  adjoint_scratch_.resize(grid_.size());
-}
-
-template <typename Value>
-void PoissonSystem::weighted_temporal_values(Value&& value) const {
-  const auto scale = [&](int k, size_t i) -> float {
-    if (!masked_) return w_[k][i];
-    return ((bits_[i] >> k) & 1) ? term_w_[k] : 0.0f;
-  };
-  value(scale, temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data());
+  if (temporal_targets_) temporal_scratch_.resize(size_t(kTemporalTerms) * grid_.size());
 }
 
 double PoissonSystem::apply_temporal_targets_part(const float* p, float* q) const {
-  const Grid g = grid_;
-  weighted_temporal_values([&](auto&& scale, float* dt, float* dxdt, float* dydt) {
-    apply_temporal_targets(g, *temporal_targets_, p, scale, dt, dxdt, dydt);
+  float* h = temporal_scratch_.data();
+  // The weight mode is fixed per system: decided here, not per constraint.
+  if (masked_) {
+    const uint8_t* bits = bits_.data();
+    const std::array<float, kTermCount> w = term_w_;
+    apply_temporal_targets(grid_, *temporal_targets_, p,
+                           [&](int k, size_t i) { return ((bits[i] >> k) & 1) ? w[size_t(k)] : 0.0f; }, h);
+  } else {
+    const float* w[kTermCount] = {};
+    for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt}) w[term_index(t)] = w_[term_index(t)].data();
+    apply_temporal_targets(grid_, *temporal_targets_, p, [&](int k, size_t i) { return w[k][i]; }, h);
+  }
+  return temporal_targets_adjoint(grid_, *temporal_targets_, h, /*absolute=*/false, q, p);
+}
+
+template <typename Value>
+void PoissonSystem::add_temporal_adjoint(Value&& value, bool absolute, float* out) const {
+  float* h = temporal_scratch_.data();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, grid_.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i)
+      for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt})
+        h[size_t(kTemporalTerms) * i + size_t(temporal_slot(t))] = temporal_weight(term_index(t), i) * value(t, i);
   });
-  const TemporalTermValues h{temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data()};
-  float* qw = adjoint_scratch_.data();
-  temporal_targets_adjoint(g, *temporal_targets_, h, /*absolute=*/false, /*accumulate=*/false, qw);
-  return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), 0.0,
-      [&](const tbb::blocked_range<size_t>& r, double acc) {
-        float local = 0;
-        for (size_t i = r.begin(); i != r.end(); ++i) {
-          q[i] += qw[i];
-          local += p[i] * qw[i];
-        }
-        return acc + local;
-      },
-      std::plus<double>());
+  temporal_targets_adjoint(grid_, *temporal_targets_, h, absolute, out);
 }
 
 // Mask mode: v_c = w_c d_c with constant w_c and d_c = 0 where constraint c
@@ -248,19 +243,12 @@ void PoissonSystem::rhs(const std::array<const Field*, kTermCount>& targets, Fie
   else rhs_stencil(targets, b);
   if (!follows_motion()) return;
   // b += Σ Hᵀ W d over the motion-following temporal terms.
-  const Grid g = grid_;
-  const Field* d[3] = {targets[term_index(Term::kDt)], targets[term_index(Term::kDxdt)],
-                       targets[term_index(Term::kDydt)]};
-  weighted_temporal_values([&](auto&& scale, float* dt, float* dxdt, float* dydt) {
-    float* out[3] = {dt, dxdt, dydt};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& r) {
-      for (int k = 0; k < 3; ++k)
-        for (size_t i = r.begin(); i != r.end(); ++i)
-          out[k][i] = d[k] ? scale(term_index(Term::kDt) + k, i) * (*d[k])[i] : 0.0f;
-    });
-  });
-  const TemporalTermValues h{temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data()};
-  temporal_targets_adjoint(g, *temporal_targets_, h, /*absolute=*/false, /*accumulate=*/true, b->data());
+  add_temporal_adjoint(
+      [&](Term t, size_t i) {
+        const Field* d = targets[term_index(t)];
+        return d ? (*d)[i] : 0.0f;
+      },
+      /*absolute=*/false, b->data());
 }
 
 void PoissonSystem::rhs_stencil(const std::array<const Field*, kTermCount>& targets, Field* b) const {
@@ -328,15 +316,7 @@ void PoissonSystem::diagonal(Field* d) const {
   if (!follows_motion()) return;
   // Every coefficient of a temporal constraint is ±1: its weight adds to the
   // diagonal at each pixel it touches.
-  weighted_temporal_values([&](auto&& scale, float* dt, float* dxdt, float* dydt) {
-    float* out[3] = {dt, dxdt, dydt};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& r) {
-      for (int k = 0; k < 3; ++k)
-        for (size_t i = r.begin(); i != r.end(); ++i) out[k][i] = scale(term_index(Term::kDt) + k, i);
-    });
-  });
-  const TemporalTermValues h{temporal_scratch_[0].data(), temporal_scratch_[1].data(), temporal_scratch_[2].data()};
-  temporal_targets_adjoint(g, *temporal_targets_, h, /*absolute=*/true, /*accumulate=*/true, d->data());
+  add_temporal_adjoint([](Term, size_t) { return 1.0f; }, /*absolute=*/true, d->data());
 }
 
 void constraint_residuals(const Grid& g, Term term, const float* x, const Field& target,

@@ -67,9 +67,15 @@ class PoissonSystem {
   bool stencil_temporal() const { return temporal_ && !follows_motion(); }
   // Adds the motion-following temporal terms' part of A p to q; returns its p·(A p).
   double apply_temporal_targets_part(const float* p, float* q) const;
-  // h_term = w_term · v_term per temporal constraint, into the scratch fields.
+  // Weight of temporal term k (a term_index) at pixel i, in either mode.
+  float temporal_weight(int k, size_t i) const {
+    if (!masked_) return w_[k][i];
+    return ((bits_[i] >> k) & 1) ? term_w_[k] : 0.0f;
+  }
+  // Fills temporal_scratch_ with w · value(term, i) per temporal constraint
+  // and adds its adjoint to *out.
   template <typename Value>
-  void weighted_temporal_values(Value&& value) const;
+  void add_temporal_adjoint(Value&& value, bool absolute, float* out) const;
   // Weight of constraint t at pixel i in either mode (setup passes only).
   float weight_at(Term t, size_t i) const {
     const int k = term_index(t);
@@ -91,10 +97,9 @@ class PoissonSystem {
   // that span's stencil reads (ConstWeights apply); all ones for outside lines.
   std::vector<uint8_t> uniform_spans_, all_uniform_;
   const TemporalTargets* temporal_targets_ = nullptr;
-  // Per-constraint scratch of the motion-following terms (dt, dxdt, dydt) and
-  // their adjoint; apply() is called by one CG at a time.
-  mutable std::array<Field, 3> temporal_scratch_;
-  mutable Field adjoint_scratch_;
+  // Per-constraint values of the motion-following terms (interleaved dt,
+  // dxdt, dydt); apply() is called by one CG at a time.
+  mutable Field temporal_scratch_;
 };
 
 // (H_t x)(p) − d(p) for every valid constraint of term t (0 elsewhere); the

@@ -2,6 +2,10 @@
 
 #include "core/recon/gradient_window.h"
 
+#include <tbb/parallel_reduce.h>
+
+#include <functional>
+
 namespace gdvr {
 
 TemporalTargets build_temporal_targets(const GradientWindow& window) {
@@ -50,32 +54,65 @@ TemporalTargets build_temporal_targets(const GradientWindow& window) {
   return out;
 }
 
-void temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const TemporalTermValues& h,
-                              bool absolute, bool accumulate, float* out) {
-  const size_t W = size_t(g.width), fs = g.frame_size();
-  const float plus = 1.0f, minus = absolute ? 1.0f : -1.0f;
+namespace {
+
+// One line of the adjoint into v[0, W): pixel i = begin + x. `up` says whether
+// the line above is in the same frame. Plain pointers, so that the loop keeps
+// nothing in memory that a store could alias.
+void adjoint_line(const float* __restrict h, const int32_t* __restrict prev, int64_t begin, int64_t W, bool up,
+                  float minus, float* __restrict v) {
+  constexpr int kT = kTemporalTerms;
+  static const float kZeros[kT] = {0, 0, 0};
+  for (int64_t x = 0; x < W; ++x) {
+    const int64_t i = begin + x;
+    const float* own = h + kT * i;
+    const float* left = x > 0 ? own - kT : kZeros;
+    const float* above = up ? own - kT * W : kZeros;
+    // Pixel i as a source: x_t(i) has coefficient −1 in dt, +1 in dxdt and
+    // dydt, and −1 in the dxdt / dydt of its left / upper neighbour.
+    float s = minus * own[0] + own[1] + own[2] + minus * (left[1] + above[2]);
+    // Pixel i as the target j of the source prev[i]: +1 in dt, −1 in dxdt
+    // and dydt; as j + e_x (j + e_y) of the source landing left of (above)
+    // it: +1. prev is −1 throughout the window's first frame.
+    const int32_t k = prev[i];
+    const int32_t kl = x > 0 ? prev[i - 1] : -1;
+    const int32_t ku = up ? prev[i - W] : -1;
+    const float* src = k >= 0 ? h + kT * int64_t(k) : kZeros;
+    const float* src_left = kl >= 0 ? h + kT * int64_t(kl) : kZeros;
+    const float* src_above = ku >= 0 ? h + kT * int64_t(ku) : kZeros;
+    s += src[0] + minus * (src[1] + src[2]) + src_left[1] + src_above[2];
+    v[x] = s;
+  }
+}
+
+}  // namespace
+
+double temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const float* h, bool absolute,
+                                float* out, const float* dot_with) {
+  const int64_t W = g.width, H = g.height;
+  const float minus = absolute ? 1.0f : -1.0f;
   const int32_t* prev = targets.prev_source.data();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, g.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i != r.end(); ++i) {
-      const size_t x = i % W, y = (i / W) % size_t(g.height);
-      const bool has_prev_frame = i >= fs;
-      // Pixel i as a source: x_t(i) has coefficient −1 in dt, +1 in dxdt and
-      // dydt, and −1 in the dxdt / dydt of its left / upper neighbour.
-      float v = minus * h.dt[i] + plus * h.dxdt[i] + plus * h.dydt[i];
-      if (x > 0) v += minus * h.dxdt[i - 1];
-      if (y > 0) v += minus * h.dydt[i - W];
-      // Pixel i as a target j of the source k = prev[i]: +1 in dt, −1 in dxdt
-      // and dydt; as j + e_x (j + e_y) of the source landing left of (above) it: +1.
-      if (has_prev_frame) {
-        if (const int32_t k = prev[i]; k >= 0) v += plus * h.dt[k] + minus * h.dxdt[k] + minus * h.dydt[k];
-        if (x > 0)
-          if (const int32_t k = prev[i - 1]; k >= 0) v += plus * h.dxdt[k];
-        if (y > 0)
-          if (const int32_t k = prev[i - W]; k >= 0) v += plus * h.dydt[k];
-      }
-      out[i] = accumulate ? out[i] + v : v;
-    }
-  });
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<int64_t>(0, int64_t(g.rows()), std::max<int64_t>(1, 16384 / W)), 0.0,
+      [&](const tbb::blocked_range<int64_t>& rows, double acc) {
+        std::vector<float> v(static_cast<size_t>(W));
+        for (int64_t row = rows.begin(); row != rows.end(); ++row) {
+          adjoint_line(h, prev, row * W, W, row % H != 0, minus, v.data());
+          float* __restrict o = out + row * W;
+          for (int64_t x = 0; x < W; ++x) o[x] += v[size_t(x)];
+          if (!dot_with) continue;
+          // Eight partial sums, as the CG kernels keep (poisson_kernels.h).
+          const float* __restrict p = dot_with + row * W;
+          float part[8] = {};
+          int64_t x = 0;
+          for (; x + 8 <= W; x += 8)
+            for (int l = 0; l < 8; ++l) part[l] += p[x + l] * v[size_t(x + l)];
+          for (; x < W; ++x) part[x % 8] += p[x] * v[size_t(x)];
+          acc += ((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7]));
+        }
+        return acc;
+      },
+      std::plus<double>());
 }
 
 }  // namespace gdvr

@@ -46,28 +46,27 @@ struct GradientWindow;
 // 0..W−2 is zero, so windows without motion keep the stencil.
 TemporalTargets build_temporal_targets(const GradientWindow& window);
 
-// Per-constraint values of the three temporal terms, planar (0 where a term
-// has no constraint). The operator's passes work on these.
-struct TemporalTermValues {
-  const float* dt = nullptr;
-  const float* dxdt = nullptr;
-  const float* dydt = nullptr;
-};
+// Per-constraint values of the three temporal terms, interleaved per pixel
+// (dt, dxdt, dydt; 0 where a term has no constraint), so that the adjoint's
+// reads at another pixel's constraint cost one cache line, not three.
+constexpr int kTemporalTerms = 3;
+inline int temporal_slot(Term t) { return term_index(t) - term_index(Term::kDt); }
 
-// h_term(i) = scale_term(i) · (H_term x)(i) at every pixel where scale_term(i)
-// ≠ 0 (and 0 elsewhere): scale is a per-constraint weight, 0 where the
-// constraint does not exist, which must hold wherever a target would leave the
-// grid. `scale(term_index, i)` is called once per pixel and term.
+// h[3i + slot(term)] = scale(term_index, i) · (H_term x)(i): scale is a
+// per-constraint weight that must be 0 where the constraint does not exist.
+// With temporal_targets_adjoint(h) this is the temporal part of A x. (Two
+// passes through h measured 1.7x faster than one pass that evaluates each
+// constraint where it is needed, on a 128² window of 20 frames.)
 template <typename Scale>
-void apply_temporal_targets(const Grid& g, const TemporalTargets& targets, const float* x, Scale&& scale,
-                            float* h_dt, float* h_dxdt, float* h_dydt);
+void apply_temporal_targets(const Grid& g, const TemporalTargets& targets, const float* x, Scale&& scale, float* h);
 
-// out(i) = Σ over the temporal constraints touching pixel i of c·h(constraint),
+// v(i) = Σ over the temporal constraints touching pixel i of c·h(constraint),
 // with c the coefficient of x(i) in that constraint (±1), or |c| = 1 when
 // `absolute` (the diagonal of Hᵀ W H is the adjoint of the weights with
-// absolute coefficients). `out` is added to when `accumulate`, else assigned.
-void temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const TemporalTermValues& h,
-                              bool absolute, bool accumulate, float* out);
+// absolute coefficients). out(i) += v(i); returns Σ dot_with(i)·v(i) when
+// `dot_with` is given (CG's p·Ap), else 0.
+double temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const float* h, bool absolute,
+                                float* out, const float* dot_with = nullptr);
 
 // (H_term x)(i) for one temporal term at pixel i (the constraint must exist).
 inline float temporal_target_difference(const Grid& g, const TemporalTargets& targets, Term term, const float* x,

@@ -5,7 +5,7 @@
 //   gdvr-bench-recon [--threads N] [--runs R] [--width W] [--height H]
 //                    [--frames F] [--methods l2,l1] [--no-window] [--no-single]
 //                    [--l2-tolerance T] [--l1-inner N] [--l1-outer N] [--l1-inner-tolerance T]
-//                    [--alpha A] [--tile-size N] [--tile-halo H] [--diff-png PATH]
+//                    [--alpha A] [--tile-size N] [--tile-halo H] [--diff-png PATH] [--pan P]
 //   gdvr-bench-recon --impulse [--alpha A] [--frames F]
 // --tile-size N also solves each case by tiles (core/recon/tiled_reconstruct.h)
 // and reports the time and the agreement with the whole-frame solve (max
@@ -14,6 +14,9 @@
 // so that the largest difference is white.
 // GDVR_POISSON_KERNELS=baseline|avx2|avx512 picks the solve's kernels
 // (core/recon/poisson_kernels.h; all give the same bits).
+// --pan P makes the window's content move P pixels right per frame, with the
+// temporal terms following it (GradientFrame::temporal_target; the
+// reconstruction's motion-compensated path, docs/reconstruction.md).
 // --impulse prints the L2 operator's impulse response against distance, from
 // which the default halo is chosen (docs/reconstruction.md, "Tiled solve").
 #include <sys/resource.h>
@@ -64,9 +67,13 @@ double peak_rss_mib() {
   return u.ru_maxrss / 1024.0;  // Linux reports KiB
 }
 
+// Pixels per frame the content moves right (--pan).
+int g_pan = 0;
+
 // A smooth field with moving edges plus white noise of typical G-PT magnitude
 // (primal σ = 0.1, gradients σ = 0.03): a realistic workload for CG/IRLS.
 float value(int x, int y, int t, int c) {
+  x -= g_pan * t;
   const float s = 0.5f + 0.3f * std::sin(0.013f * x + 0.1f * t + c) * std::cos(0.017f * y);
   const float edge = ((x / 160 + y / 90) % 2 == 0 && x + t * 4 > 300) ? 0.7f : 0.0f;
   return s + edge;
@@ -75,6 +82,10 @@ float value(int x, int y, int t, int c) {
 // `variances`: the noise's true variances too (the weighted control variates need them).
 std::shared_ptr<const GradientFrame> make_frame(int W, int H, int t, bool temporal, bool variances) {
   auto f = std::make_shared<GradientFrame>();
+  if (temporal && g_pan != 0) {
+    f->temporal_target = Image(W, H, 2);
+    for (int i = 0; i < W * H; ++i) f->temporal_target.data()[size_t(i) * 2] = float(g_pan);
+  }
   for (Term term : kAllTerms) {
     if (is_temporal(term) && !temporal) continue;
     f->buffer(term) = Image(W, H, 3);
@@ -89,9 +100,11 @@ std::shared_ptr<const GradientFrame> make_frame(int W, int H, int t, bool tempor
     for (int x = 0; x < W; ++x)
       for (int c = 0; c < 3; ++c) {
         const int xr = std::min(x + 1, W - 1), yd = std::min(y + 1, H - 1);
-        const float v = value(x, y, t, c), vn = value(x, y, t + 1, c);
+        // The next frame at the target (the same pixel unless --pan).
+        const int tx = std::clamp(x + g_pan, 0, W - 1), txr = std::min(tx + 1, W - 1);
+        const float v = value(x, y, t, c), vn = value(tx, y, t + 1, c);
         const float dx = value(xr, y, t, c) - v, dy = value(x, yd, t, c) - v;
-        const float dxn = value(xr, y, t + 1, c) - vn, dyn = value(x, yd, t + 1, c) - vn;
+        const float dxn = value(txr, y, t + 1, c) - vn, dyn = value(tx, yd, t + 1, c) - vn;
         f->buffer(Term::kPrimal).at(x, y, c) = v + 0.1f * n(rng);
         f->buffer(Term::kDx).at(x, y, c) = dx + 0.03f * n(rng);
         f->buffer(Term::kDy).at(x, y, c) = dy + 0.03f * n(rng);
@@ -257,6 +270,7 @@ int main(int argc, char** argv) {
     else if (k == "--tile-size") a.tile_size = int(tools::int_option("gdvr-bench-recon", k, next(), 16, 1 << 20));
     else if (k == "--tile-halo") a.settings.tile_halo = int(tools::int_option("gdvr-bench-recon", k, next(), 0, 1 << 20));
     else if (k == "--diff-png") a.diff_png = next();
+    else if (k == "--pan") g_pan = int(tools::int_option("gdvr-bench-recon", k, next(), -64, 64));
     else if (k == "--methods") {
       a.methods.clear();
       std::stringstream ss(next());
