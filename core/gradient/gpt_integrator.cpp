@@ -5,15 +5,19 @@
 #include "core/gradient/gradient_tracer.h"
 #include "core/render/perspective_camera.h"
 #include "core/render/tile_scheduler.h"
+#include "core/temporal/replay_map.h"
 
 namespace gdvr {
 
 Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRenderSettings& settings,
                                           const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control,
-                                          const TemporalShiftTarget* temporal) {
+                                          const TemporalShiftTarget* temporal, const ReplayMap* replay) {
   const int w = settings.width, h = settings.height;
   if (w <= 0 || h <= 0) return invalid_argument("render resolution must be positive");
   if (settings.spp <= 0) return invalid_argument("spp must be positive");
+  if (replay && (replay->width != w || replay->height != h || replay->sources.size() != size_t(w) * size_t(h)))
+    return invalid_argument("replay map is " + std::to_string(replay->width) + "x" + std::to_string(replay->height) +
+                            ", the frame " + std::to_string(w) + "x" + std::to_string(h));
   GDVR_RETURN_IF_ERROR(gpt.validate());
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
@@ -38,6 +42,7 @@ Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRe
     Status st = run_tiles(w, h, pass_tile_options(settings, control, start), [&](const Tile& tile) {
       GradientTracer tracer(scene, camera, w, h, settings.path, gpt, settings.seed, frame);
       tracer.set_temporal_target(temporal);
+      tracer.set_replay_map(replay);
       GradientSample gs;
       uint64_t tile_shifts = 0, tile_failures = 0;
       // Sample-major: one sample index over the whole tile at a time, so that

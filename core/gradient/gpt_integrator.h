@@ -11,6 +11,8 @@
 
 namespace gdvr {
 
+struct ReplayMap;  // core/temporal/replay_map.h
+
 struct GptFrameResult {
   GradientFilmBuffers buffers;
   int spp = 0;
@@ -24,8 +26,13 @@ struct GptFrameResult {
 
 // `temporal`, when given, also shifts every base path into that frame
 // (T-GPT's path-space temporal shift): buffers.temporal etc. are then filled.
+// `replay`, when given (width × height), says whose sample stream each pixel
+// replays and how it rotates its sub-pixel position (T-GPT's
+// motion-compensated replay, GradientTracer::set_replay_map); without it the
+// frame is the same bit for bit as before the map existed.
 Expected<GptFrameResult> render_frame_gpt(const FrameScene& scene, const FrameRenderSettings& settings,
                                           const GptSettings& gpt, uint32_t frame, const FrameRenderControl& control,
-                                          const TemporalShiftTarget* temporal = nullptr);
+                                          const TemporalShiftTarget* temporal = nullptr,
+                                          const ReplayMap* replay = nullptr);
 
 }  // namespace gdvr

@@ -5,6 +5,7 @@
 #include "core/gradient/base_path.h"
 #include "core/gradient/reconnection_shift.h"
 #include "core/gradient/replay_shift.h"
+#include "core/temporal/replay_map.h"
 
 namespace gdvr {
 
@@ -28,12 +29,14 @@ void GradientTracer::begin_sample(const Tile& tile, uint32_t s) {
 
 void GradientTracer::sample(int x, int y, GradientSample* out) {
   *out = GradientSample();
-  Sampler sampler(seed_, frame_, uint32_t(x), uint32_t(y), s_);
+  // Whose stream this sample replays (the pixel's own without a replay map).
+  const ReplaySource* source = replay_ ? &replay_->at(x, y) : nullptr;
+  Sampler sampler(seed_, frame_, source ? source->x : uint32_t(x), source ? source->y : uint32_t(y), s_);
   // Box filter, as render_frame_pt. The pixel's own position is drawn even
   // when the shared one is used, so the rest of its stream stays PT's.
   const Vec2f own_jitter = sampler.next_2d();
   const bool shared = settings_.shared_jitter;
-  const Vec2f jitter = shared ? shared_jitter_ : own_jitter;
+  const Vec2f jitter = shared ? shared_jitter_ : source ? rotate_jitter(own_jitter, source->shift) : own_jitter;
   const Sampler after_camera = sampler;
   if (shared) {
     trace_base_path(scene_, path_, camera_hits_.at(x, y, counters_), sampler, counters_, &base_);

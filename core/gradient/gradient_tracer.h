@@ -14,6 +14,8 @@
 
 namespace gdvr {
 
+struct ReplayMap;  // core/temporal/replay_map.h
+
 class GradientTracer {
  public:
   GradientTracer(const FrameScene& scene, const PerspectiveCamera& camera, int width, int height,
@@ -34,6 +36,13 @@ class GradientTracer {
   // temporal shift); null: spatial offsets only.
   void set_temporal_target(const TemporalShiftTarget* target) { temporal_ = target; }
   uint64_t temporal_rays() const { return temporal_rays_; }  // part of counters().rays
+  // T-GPT's motion-compensated replay: each pixel draws the stream of its
+  // map entry's source pixel and rotates that stream's sub-pixel position by
+  // the entry's shift (its offsets into the neighbours use the same rotated
+  // position). Null: every pixel its own stream, unrotated. Under
+  // GptSettings::shared_jitter only the stream follows the map: the shared
+  // position is the tile's, not the pixel's.
+  void set_replay_map(const ReplayMap* map) { replay_ = map; }
 
  private:
   const FrameScene& scene_;
@@ -50,6 +59,7 @@ class GradientTracer {
   CameraHitCache camera_hits_;
   const TemporalShiftTarget* temporal_ = nullptr;
   uint64_t temporal_rays_ = 0;
+  const ReplayMap* replay_ = nullptr;
 };
 
 }  // namespace gdvr

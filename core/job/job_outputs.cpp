@@ -192,7 +192,7 @@ const std::vector<std::string>& known_exr_layers() {
     std::vector<std::string> n = {
         "direct",   "variance", "primal",   "dx",       "dy",       "dt",     "dxdt",
         "dydt",     "primal_var", "dx_var", "dy_var",   "dt_var",   "dxdt_var", "dydt_var",
-        "shift_failure_rate", "temporal_failure_rate", "motion"};
+        "shift_failure_rate", "temporal_failure_rate", "motion", "temporal_target"};
     // Every integrator's frames carry them (core/render/feature_buffers.h).
     n.insert(n.end(), feature_layer_names().begin(), feature_layer_names().end());
     return n;

@@ -39,7 +39,15 @@ MotionField compute_motion_field(const FrameScene& scene, const Scene& desc_t, c
           Vec3f p = si.p;
           if (si.shape >= 0 && size_t(si.shape) < moves.size() && moves[size_t(si.shape)])
             p = carry[size_t(si.shape)].point(p);
-          ok = cam_other.project(p, &film);
+          if (!camera_moves && p.x == si.p.x && p.y == si.p.y && p.z == si.p.z) {
+            // Nothing moved under this pixel: exactly zero, not the round-off
+            // (~1e-5 px) of projecting the hit back, which the replay map
+            // would take for a sub-pixel motion and rotate the jitter by.
+            film = centre;
+            ok = true;
+          } else {
+            ok = cam_other.project(p, &film);
+          }
         } else if (!camera_moves) {
           film = centre;  // background seen along the same direction
           ok = true;
@@ -50,8 +58,8 @@ MotionField compute_motion_field(const FrameScene& scene, const Scene& desc_t, c
                                  &film);
         }
         if (ok) {
-          out.at(x, y, 0) = std::round(film.x - centre.x);
-          out.at(x, y, 1) = std::round(film.y - centre.y);
+          out.at(x, y, 0) = film.x - centre.x;
+          out.at(x, y, 1) = film.y - centre.y;
           out.at(x, y, 2) = 1.0f;
         }
       }
@@ -73,11 +81,12 @@ TemporalMask temporal_consistency(const Image& forward, const Image& backward, c
   // other frame's field at q must bring it back to p (±tol).
   auto round_trip = [&](const Image& there, const Image& back, int x, int y) {
     if (there.at(x, y, 2) == 0.0f) return false;
-    const int mx = int(there.at(x, y, 0)), my = int(there.at(x, y, 1));
+    const int mx = motion_pixel_offset(there.at(x, y, 0)), my = motion_pixel_offset(there.at(x, y, 1));
     if (max_motion >= 0 && (std::abs(mx) > max_motion || std::abs(my) > max_motion)) return false;
     const int qx = x + mx, qy = y + my;
     if (qx < 0 || qy < 0 || qx >= w || qy >= h || back.at(qx, qy, 2) == 0.0f) return false;
-    return std::abs(mx + int(back.at(qx, qy, 0))) <= tol && std::abs(my + int(back.at(qx, qy, 1))) <= tol;
+    return std::abs(mx + motion_pixel_offset(back.at(qx, qy, 0))) <= tol &&
+           std::abs(my + motion_pixel_offset(back.at(qx, qy, 1))) <= tol;
   };
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {

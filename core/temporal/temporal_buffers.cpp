@@ -6,6 +6,7 @@
 #include <tuple>
 
 #include "core/temporal/denoised_data_term.h"
+#include "core/temporal/replay_map.h"
 
 namespace gdvr {
 namespace {
@@ -29,6 +30,31 @@ Image difference(const Image& next, const Image& cur) {
 // for a positively correlated pair, i.e. the weighted solver trusts dt less
 // than it could. The half buffers that would measure it are not kept.
 Image sum(const Image& a, const Image& b) { return average(a, b, 1.0f); }
+
+// next(p + target(p)) + sign · cur(p) where p has its replayed pair. Elsewhere
+// the value is 0, so that the EXR layers show what the solve uses, and a
+// variance (sign +1) is the same-pixel one, as without compensation.
+Image paired(const Image& next, const Image& cur, const ReplayPairs& pairs, float sign) {
+  const int w = cur.width(), h = cur.height(), C = cur.channels();
+  const bool variance = sign > 0;
+  Image out(w, h, C);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool paired = pairs.valid[size_t(y) * size_t(w) + size_t(x)] != 0;
+      if (!paired && !variance) continue;
+      const int qx = paired ? x + int(pairs.target.at(x, y, 0)) : x;
+      const int qy = paired ? y + int(pairs.target.at(x, y, 1)) : y;
+      for (int c = 0; c < C; ++c) out.at(x, y, c) = next.at(qx, qy, c) + sign * cur.at(x, y, c);
+    }
+  return out;
+}
+Image paired_difference(const Image& next, const Image& cur, const ReplayPairs& pairs) {
+  return paired(next, cur, pairs, -1.0f);
+}
+// Var next(q) + Var cur(p): the same upper bound as sum().
+Image paired_sum(const Image& next_var, const Image& cur_var, const ReplayPairs& pairs) {
+  return paired(next_var, cur_var, pairs, 1.0f);
+}
 
 }  // namespace
 
@@ -114,6 +140,17 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
     g.dt_var = sum(fwd_var->image, bwd_var->image);
     shift_failures = average(fwd_fail->image, bwd_fail->image, 0.5f);
   }
+  const ImageLayer* backward = settings.motion_vectors ? next.find("motion_back") : nullptr;
+  if (settings.motion_vectors && !backward)
+    return invalid_argument("tgpt: the next frame's buffers lack 'motion_back' although this frame has 'motion'");
+  if (backward && (backward->image.width() != w || backward->image.height() != h ||
+                   forward->image.width() != w || forward->image.height() != h))
+    return invalid_argument("tgpt: the motion fields ('motion', 'motion_back') differ in size from the passes");
+  // Motion-compensated pairs (replay only): A_{t+1} at q = p + m(p), the
+  // pixel whose pass A replayed B_t's stream at p (core/temporal/replay_map.h).
+  const bool compensate = settings.compensates_motion() && !fwd;
+  ReplayPairs pairs;
+  if (compensate) pairs = replay_pairs(forward->image, backward->image);
   for (int k = fwd ? 1 : 0; k < 3; ++k) {
     const std::string n = names[k];
     auto bt = need(t, ("b_" + n).c_str(), "this");
@@ -124,12 +161,22 @@ Expected<TemporalGradients> temporal_gradients(const LayeredImage& t, const Laye
       if (!e->ok()) return e->status();
     if (an.value()->width() != w || an.value()->height() != h)
       return invalid_argument("tgpt: the next frame's buffers have a different size");
-    *values[k] = difference(*an.value(), *bt.value());
-    *vars[k] = sum(*an_var.value(), *bt_var.value());
+    if (compensate) {
+      *values[k] = paired_difference(*an.value(), *bt.value(), pairs);
+      *vars[k] = paired_sum(*an_var.value(), *bt_var.value(), pairs);
+    } else {
+      *values[k] = difference(*an.value(), *bt.value());
+      *vars[k] = sum(*an_var.value(), *bt_var.value());
+    }
   }
-  if (settings.motion_vectors) {
-    const ImageLayer* backward = next.find("motion_back");
-    if (!backward) return invalid_argument("tgpt: the next frame's buffers lack 'motion_back' although this frame has 'motion'");
+  if (compensate) {
+    g.failed = pairs.failed;
+    g.failure_rate = std::move(pairs.failure);
+    g.valid = std::move(pairs.valid);
+    g.target = std::move(pairs.target);
+    return g;
+  }
+  if (backward) {
     TemporalMask mask = temporal_consistency(forward->image, backward->image, settings);
     g.failed = mask.failed;
     g.failure_rate = std::move(mask.failure);
@@ -225,6 +272,7 @@ Expected<GradientFrame> tgpt_gradient_frame(const LayeredImage& t, TemporalGradi
     }
     if (!temporal->valid.empty())
       for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) gf.mask(term) = temporal->valid;
+    gf.temporal_target = std::move(temporal->target);
   }
   GDVR_RETURN_IF_ERROR(gf.validate());
   return gf;

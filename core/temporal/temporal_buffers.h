@@ -17,6 +17,11 @@
 // i.e. the same-pixel differences that core/recon's H_dt, H_dxdt, H_dydt
 // expect (docs/reconstruction.md). Each is unbiased (difference of two unbiased
 // estimates), and low-variance where the replay pair stays correlated.
+// With motion compensation (TgptSettings::compensates_motion) the pair follows
+// the surface: dt_t(p) = A_{t+1}.primal(q) − B_t.primal(p) ≈ I_{t+1}(q) − I_t(p)
+// with q = p + o(p) the pixel whose pass A replayed p's stream
+// (core/temporal/replay_map.h), likewise dxdt and dydt, and o goes to the
+// solve as GradientFrame::temporal_target.
 #pragma once
 
 #include <cstdint>
@@ -38,6 +43,10 @@ struct TemporalGradients {
   Image dt_var, dxdt_var, dydt_var;  // RGB
   std::vector<uint8_t> valid;        // empty: every pixel valid
   Image failure_rate;                // one channel: 1 where the temporal constraint was dropped
+  // Motion-compensated pairs: X, Y = o(p) = q − p in whole pixels (0 where
+  // dropped), where p's constraints land in the next frame. Empty: the same
+  // pixel (no compensation, a static pair).
+  Image target;
   bool static_pair = false;          // exactly zero, no subtraction done
   int64_t failed = 0;
 };
@@ -68,7 +77,8 @@ inline GradientVariances gradient_variances_for(ReconMethod method) {
 
 // The reconstruction's view of frame t: primal, dx, dy (and variances) from
 // the buffers, plus dt, dxdt, dydt when `temporal` is given (with its mask on
-// all three temporal terms; its images are moved from). The primal is the
+// all three temporal terms and its target as the frame's temporal_target; its
+// images are moved from). The primal is the
 // buffers' denoised data term with its trust map where they carry one and
 // `data_term` is not kSampled (TgptSettings::data_term); kDenoised on buffers
 // without one is FAILED_PRECONDITION.

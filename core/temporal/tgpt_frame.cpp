@@ -4,6 +4,8 @@
 #include <chrono>
 #include <memory>
 
+#include "core/temporal/replay_map.h"
+
 namespace gdvr {
 namespace {
 
@@ -72,6 +74,15 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
     forward = TemporalTarget(*nb.next_scene, *nb.at_t, *nb.next, render.width, render.height);
   }
 
+  // ---- Motion towards the previous frame, first: the compensated replay
+  // (TgptSettings::motion_compensation) renders pass A along it ----
+  const bool prev_changes = nb.prev && nb.to_prev.any();
+  if (prev_changes) {
+    out.backward = compute_motion_field(scene, *nb.at_t, *nb.prev, render.width, render.height, render.threads);
+    out.rays += out.backward.rays;
+    out.temporal_rays += out.backward.rays;
+  }
+
   // ---- Pass A (stream s(t)): the replayed offset of the previous frame's pass B ----
   FrameRenderControl control_a = control, control_b = control;
   if (control.on_progress) {
@@ -84,14 +95,19 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
     out.reused_pass_a = true;
     out.a_spp = settings_a.spp;  // the caller's count for it (the previous pass B's)
   } else {
-    auto a = render_frame_gpt(scene, settings_a, settings.gpt, streams.a, control_a, backward.target());
+    // Each pixel replays the stream of the previous frame's pixel its surface
+    // came from (a copied pass A needs none: a static pair does not move).
+    ReplayMap replay;
+    if (prev_changes && settings.compensates_motion()) replay = build_replay_map(out.backward.offsets);
+    auto a = render_frame_gpt(scene, settings_a, settings.gpt, streams.a, control_a, backward.target(),
+                              replay.empty() ? nullptr : &replay);
     if (!a.ok()) return a.status().with_context("pass A: ");
     out.a = std::move(a->buffers);
     out.rays += a->rays;
     out.invalid_samples += a->invalid_samples;
     out.a_spp = a->spp;
     a_seconds = a->sampling_seconds;
-    if (nb.prev && nb.to_prev.any()) out.temporal_rays += reconnect ? a->temporal_rays : a->rays;
+    if (prev_changes) out.temporal_rays += reconnect ? a->temporal_rays : a->rays;
   }
   // ---- Pass B (stream s(t_next)): replayed by the next frame's pass A ----
   FrameRenderSettings settings_b = half;
@@ -108,16 +124,12 @@ Expected<TgptFrameRender> render_tgpt_frame(const FrameScene& scene, const Frame
   out.spp = out.a_spp + out.b_spp;
   out.sampling_seconds = a_seconds + b->sampling_seconds;
 
-  // ---- Motion vectors, only towards neighbours that differ ----
+  // ---- Motion towards the next frame, only where it differs (the backward
+  // field is above) ----
   if (nb.next && nb.to_next.any()) {
     out.forward = compute_motion_field(scene, *nb.at_t, *nb.next, render.width, render.height, render.threads);
     out.rays += out.forward.rays;
     out.temporal_rays += out.forward.rays;
-  }
-  if (nb.prev && nb.to_prev.any()) {
-    out.backward = compute_motion_field(scene, *nb.at_t, *nb.prev, render.width, render.height, render.threads);
-    out.rays += out.backward.rays;
-    out.temporal_rays += out.backward.rays;
   }
   if (!direct->direct.empty())
     out.direct = merge_direct_estimates(std::move(*direct), out.a.direct, &out.b.direct);

@@ -3,7 +3,9 @@
 // towards the neighbouring frames where the frame pair changes. Everything
 // stage 2 needs (the temporal gradients are differences between this frame's
 // pass B and the next frame's pass A) is in the returned buffers, so a farm can
-// render frames in separate processes.
+// render frames in separate processes. With motion compensation
+// (TgptSettings::motion_compensation) pass A replays pass B of the previous
+// frame along the backward motion field (core/temporal/replay_map.h).
 #pragma once
 
 #include <cstdint>

@@ -18,6 +18,7 @@ std::string TgptSettings::to_string() const {
   std::ostringstream s;
   s << "tgpt{temporal_shift=" << temporal_shift_name(temporal_shift) << " data_term=" << data_term_name(data_term)
     << " window=" << window << " hop=" << effective_hop() << " motion_vectors=" << (motion_vectors ? "on" : "off")
+    << " motion_compensation=" << (motion_compensation ? "on" : "off")
     << " consistency_px=" << consistency_tolerance_px << " max_same_pixel_motion_px=" << max_same_pixel_motion_px
     << " gpt=" << gpt.to_string() << " recon=" << recon.to_string() << "}";
   return s.str();

@@ -67,14 +67,33 @@ struct TgptSettings {
   // ---- Motion vectors (primary-hit reprojection, docs/tgpt.md "dt and motion") ----
   // Off: every temporal constraint is kept (same-pixel dt is unbiased anyway).
   bool motion_vectors = true;
-  // Forward/backward consistency: |m_fwd(p) + m_bwd(p + m_fwd(p))| ≤ this, per
-  // axis, in whole pixels (±1 px in the public code).
+  // Forward/backward consistency of same-pixel constraints:
+  // |m_fwd(p) + m_bwd(p + m_fwd(p))| ≤ this, per axis, in whole pixels (±1 px
+  // in the public code). Compensated pairs need an exact round trip.
   int consistency_tolerance_px = 1;
-  // Our dt is the same-pixel difference I_{t+1}(p) − I_t(p) (the H_dt of
-  // core/recon), so the replay pair is only correlated while the surface seen
-  // through p moves by at most this many whole pixels; beyond it the
-  // constraint is dropped (docs/tgpt.md, "dt and motion"). < 0: no limit.
+  // Motion-compensated temporal constraints (Manzi et al. 2016; docs/tgpt.md,
+  // "dt and motion"): pass A of frame t+1 replays, at pixel q, the stream of
+  // pass B of frame t at the pixel the surface came from (the backward motion
+  // field), with the sub-pixel position rotated by the motion's fraction
+  // (core/temporal/replay_map.h); stage 2 pairs A_{t+1}(q) with B_t(p),
+  // q = p + m(p), and tells the solve where each constraint lands
+  // (GradientFrame::temporal_target). On a pan over texture a same-pixel pair
+  // sees different texels and dt is as noisy as a primal; the compensated
+  // pair follows the surface. Only with temporal_shift replay and
+  // motion_vectors on; with reconnect or motion_vectors off it is ignored and
+  // dt stays the same-pixel difference below.
+  bool motion_compensation = true;
+  // The same-pixel dt is I_{t+1}(p) − I_t(p) (motion_compensation off, or
+  // where it does not apply), so the replay pair is only correlated while the
+  // surface seen through p moves by at most this many whole pixels; beyond it
+  // the constraint is dropped (docs/tgpt.md, "dt and motion"). < 0: no limit.
+  // Compensated constraints have no such limit.
   int max_same_pixel_motion_px = 1;
+  // Whether stage 1 renders pass A with the replay map and stage 2 pairs
+  // along the motion (see motion_compensation).
+  bool compensates_motion() const {
+    return motion_compensation && motion_vectors && temporal_shift == TemporalShiftMapping::kReplay;
+  }
 
   // ---- Sliding-window reconstruction (docs/reconstruction.md, "Sliding windows") ----
   ReconSettings recon;

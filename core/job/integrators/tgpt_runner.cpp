@@ -318,6 +318,11 @@ Expected<FrameOutput> TgptRunner::finalize_output(int frame, const std::map<int,
   out.image.add("dydt_var", {"R", "G", "B"}, std::move(tg.dydt_var));
   if (const ImageLayer* l = layers.find("shift_failure_rate")) out.image.layers.push_back(*l);
   out.image.add("temporal_failure_rate", {"Y"}, std::move(tg.failure_rate));
+  // Where the compensated constraints land (whole pixels; zero where dropped,
+  // across a static pair and at the shot's end).
+  if (settings_.compensates_motion())
+    out.image.add("temporal_target", {"X", "Y"},
+                  tg.target.empty() ? Image(direct->image.width(), direct->image.height(), 2) : std::move(tg.target));
   if (const ImageLayer* l = layers.find("motion")) out.image.layers.push_back(*l);
   else out.image.add("motion", {"X", "Y", "V"}, Image(direct->image.width(), direct->image.height(), 3));
   copy_feature_layers(layers, &out.image);

@@ -92,20 +92,28 @@ TEST_P(StiffWindowTest, FiniteAndConverging) {
   JobSpec ref_job = job_for(512, 99);
   ref_job.integrator = Integrator::kPt;
   auto ref = run(ref_job);
-  auto lo = run(job_for(8, 1)), hi = run(job_for(32, 2));
-  for (FrameOutput& f : run(job_for(8, 3))) lo.push_back(std::move(f));
-  for (FrameOutput& f : run(job_for(32, 4))) hi.push_back(std::move(f));
+  // Three seeds per count: with two, which noise a frame's pass A draws
+  // (e.g. the motion-compensated replay's streams) moved frame 2's ratio
+  // between 0.38 and 0.51 on this glass scene's fireflies.
+  constexpr int kSeeds = 3;
+  std::vector<FrameOutput> lo, hi;
+  for (int s = 0; s < kSeeds; ++s) {
+    for (FrameOutput& f : run(job_for(8, uint64_t(2 * s + 1)))) lo.push_back(std::move(f));
+    for (FrameOutput& f : run(job_for(32, uint64_t(2 * s + 2)))) hi.push_back(std::move(f));
+  }
   ASSERT_EQ(ref.size(), 3u);
-  ASSERT_EQ(lo.size(), 6u);
-  ASSERT_EQ(hi.size(), 6u);
+  ASSERT_EQ(lo.size(), size_t(3 * kSeeds));
+  ASSERT_EQ(hi.size(), size_t(3 * kSeeds));
   for (int k = 0; k < 3; ++k) {
-    EXPECT_EQ(non_finite_layers(lo[size_t(k)]), "");
-    EXPECT_EQ(non_finite_layers(hi[size_t(k)]), "");
     const Image& r = ref[size_t(k)].image.find("")->image;
-    const double e_lo = trimmed_rel_mse(lo[size_t(k)].image.find("")->image, r) +
-                        trimmed_rel_mse(lo[size_t(k + 3)].image.find("")->image, r);
-    const double e_hi = trimmed_rel_mse(hi[size_t(k)].image.find("")->image, r) +
-                        trimmed_rel_mse(hi[size_t(k + 3)].image.find("")->image, r);
+    double e_lo = 0, e_hi = 0;
+    for (int s = 0; s < kSeeds; ++s) {
+      const size_t i = size_t(k + 3 * s);
+      EXPECT_EQ(non_finite_layers(lo[i]), "");
+      EXPECT_EQ(non_finite_layers(hi[i]), "");
+      e_lo += trimmed_rel_mse(lo[i].image.find("")->image, r);
+      e_hi += trimmed_rel_mse(hi[i].image.find("")->image, r);
+    }
     std::printf("[ window %d ] frame %d relMSE %.3g -> %.3g\n", GetParam(), k, e_lo, e_hi);
     EXPECT_LT(e_hi, 0.5 * e_lo) << "frame " << k;
   }

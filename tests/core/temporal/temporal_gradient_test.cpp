@@ -117,6 +117,12 @@ TEST_P(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
       }
 
   // ---- T-GPT over independent seeds; motion masks off so every pixel is sampled ----
+  // Motion vectors off also turns motion compensation off in stage 2: these
+  // are the same-pixel differences, which the finite differences above are.
+  // Stage 1 ran with the job's defaults, so pass A of frame 6 replayed pass B
+  // along the motion (core/temporal/replay_map.h); its pixels are unbiased
+  // either way, which this checks too. The compensated pairs are checked in
+  // motion_compensation_test.cpp.
   TgptSettings settings;
   settings.motion_vectors = false;
   constexpr int kSeeds = 12;
