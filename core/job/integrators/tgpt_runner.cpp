@@ -197,20 +197,6 @@ void TgptRunner::calibrate_stage2(const LayeredImage& layers, FrameTimeBudget* b
   GradientFrame first = frame.value();
   for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt})
     first.buffer(t) = Image(first.width(), first.height(), first.channels());
-  // Where the constraints follow the frame's motion, the solve runs the
-  // gather passes of core/recon/temporal_targets.h instead of the stencil:
-  // time those, with the frame's own whole-pixel motion.
-  const ImageLayer* motion = layers.find("motion");
-  if (settings_.compensates_motion() && motion && motion->image.width() == first.width() &&
-      motion->image.height() == first.height() && motion->image.channels() == 3) {
-    first.temporal_target = Image(first.width(), first.height(), 2);
-    for (int y = 0; y < first.height(); ++y)
-      for (int x = 0; x < first.width(); ++x) {
-        if (motion->image.at(x, y, 2) == 0.0f) continue;
-        first.temporal_target.at(x, y, 0) = float(motion_pixel_offset(motion->image.at(x, y, 0)));
-        first.temporal_target.at(x, y, 1) = float(motion_pixel_offset(motion->image.at(x, y, 1)));
-      }
-  }
   GradientWindow window;
   window.frames.push_back(std::make_shared<const GradientFrame>(std::move(first)));
   window.frames.push_back(std::make_shared<const GradientFrame>(std::move(frame.value())));
