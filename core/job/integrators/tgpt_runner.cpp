@@ -138,6 +138,28 @@ namespace {
 // its last frame, so what this over- or underestimates is not paid back: in
 // those runs at most 0.010 s per frame, 3 % of a 0.3 s budget.
 constexpr double kWindowOverCalibrationCost = 1.5;
+// Where the temporal constraints follow whole-pixel motion, the window solve
+// runs the gather passes of core/recon/temporal_targets.h next to the
+// stencil. Timed in the calibration itself they read 2x the real windows'
+// cost (one run, the demo): the two-frame window does not show it, so the
+// calibration stays the stencil's and is scaled by the stage-2 time of
+// motion-following over same-pixel constraints, measured on the same four
+// animations and budgets, one run each: 1.03–1.62, median 1.2.
+constexpr double kMotionFollowingSolveCost = 1.2;
+
+// Whether any pixel's surface moves by half a pixel or more towards the next
+// frame (the forward motion field, layer "motion"), i.e. whether the
+// motion-following constraints leave the same pixel.
+bool moves_whole_pixels(const LayeredImage& layers) {
+  const ImageLayer* motion = layers.find("motion");
+  if (!motion || motion->image.channels() != 3) return false;
+  const Image& m = motion->image;
+  for (int y = 0; y < m.height(); ++y)
+    for (int x = 0; x < m.width(); ++x)
+      if (m.at(x, y, 2) != 0.0f && (motion_pixel_offset(m.at(x, y, 0)) != 0 || motion_pixel_offset(m.at(x, y, 1)) != 0))
+        return true;
+  return false;
+}
 
 // Before anything is measured (the first frame's plan only): seconds per
 // pixel and window frame of stage 2, same measurement, two cores.
@@ -204,7 +226,8 @@ void TgptRunner::calibrate_stage2(const LayeredImage& layers, FrameTimeBudget* b
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   budget->record_one_off(seconds);
   if (!solved.ok()) return;
-  budget->set_stage2_prior(seconds / 2 * kWindowOverCalibrationCost * window_frames_per_frame());
+  const double motion = settings_.compensates_motion() && moves_whole_pixels(layers) ? kMotionFollowingSolveCost : 1.0;
+  budget->set_stage2_prior(seconds / 2 * kWindowOverCalibrationCost * motion * window_frames_per_frame());
 }
 
 Expected<FrameOutput> TgptRunner::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {
