@@ -126,4 +126,13 @@ inline GradientFrame& mutable_frame(GradientWindow& w, int t) {
   return const_cast<GradientFrame&>(*w.frames[t]);
 }
 
+// Tells the weighted method that the gradient buffers are exact (a tiny
+// variance on every gradient term).
+inline void mark_gradients_exact(GradientWindow& w) {
+  for (int t = 0; t < w.size(); ++t)
+    for (Term term : kAllTerms)
+      if (term != Term::kPrimal && mutable_frame(w, t).has(term))
+        for (float& v : mutable_frame(w, t).variance(term).data()) v = 1e-6f;
+}
+
 }  // namespace gdvr::test

@@ -47,11 +47,7 @@ TEST_P(ReconExactTest, NoisyPrimalExactGradientsRecoversImage) {
   SceneOptions o = scene();
   o.primal_sigma = 0.1f;
   GradientWindow w = test::make_window(o);
-  // The gradient buffers are exact: tell the weighted method so.
-  for (int t = 0; t < o.frames; ++t)
-    for (Term term : kAllTerms)
-      if (term != Term::kPrimal && test::mutable_frame(w, t).has(term))
-        for (float& v : test::mutable_frame(w, t).variance(term).data()) v = 1e-6f;
+  test::mark_gradients_exact(w);
   auto r = reconstruct(w, settings());
   ASSERT_TRUE(r.ok()) << r.status().to_string();
   // A screened Poisson solve with exact gradients keeps only the low

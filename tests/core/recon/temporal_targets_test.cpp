@@ -223,10 +223,7 @@ TEST_P(TemporalTargetsSolveTest, FollowingTheMotionBeatsSolvingFramesAlone) {
   test::SceneOptions o = pan();
   o.primal_sigma = 0.1f;
   GradientWindow w = test::make_window(o);
-  for (int t = 0; t < o.frames; ++t)
-    for (Term term : kAllTerms)
-      if (term != Term::kPrimal && test::mutable_frame(w, t).has(term))
-        for (float& v : test::mutable_frame(w, t).variance(term).data()) v = 1e-6f;
+  test::mark_gradients_exact(w);
   auto joint = reconstruct(w, settings());
   ASSERT_TRUE(joint.ok()) << joint.status().to_string();
   double joint_rms = 0, alone_rms = 0;
