@@ -33,7 +33,8 @@ ConstraintLayout build_constraint_layout(const GradientWindow& window, const Pix
   const Grid& g = L.grid;
   const int C = L.channels;
   L.targets = build_temporal_targets(window);
-  const bool follows_motion = !L.targets.empty();
+  // Targets decide which temporal constraints exist even where the stencil applies them.
+  const bool follows_motion = !L.targets.next_offset.empty();
   for (Term term : kAllTerms) {
     const int k = term_index(term);
     bool any_buffer = false;

@@ -20,37 +20,55 @@ TemporalTargets build_temporal_targets(const GradientWindow& window) {
       }
   if (!moves) return {};
   TemporalTargets out;
-  out.next_offset.assign(g.size(), TemporalTargets::kNone);
-  out.prev_source.assign(g.size(), -1);
-  tbb::parallel_for(0, std::max(0, g.frames - 1), [&](int t) {
-    const GradientFrame& frame = *window.frames[size_t(t)];
-    const Image& target = frame.temporal_target;
-    // A pixel whose temporal constraints are all masked claims no target, so
-    // that it cannot take one from a source whose constraints hold.
-    const auto masked_out = [&](size_t p) {
-      bool any = false;
-      for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) {
-        if (!frame.has(term)) continue;
-        if (frame.mask(term).empty() || frame.mask(term)[p]) return false;
-        any = true;
-      }
-      return any;
-    };
-    const size_t base = size_t(t) * g.frame_size(), next = base + g.frame_size();
-    std::vector<uint8_t> claimed(g.frame_size(), 0);
-    // Scan order decides which of two sources keeps a shared target.
-    for (int y = 0; y < H; ++y)
-      for (int x = 0; x < W; ++x) {
-        const int tx = target.empty() ? x : x + int(target.at(x, y, 0));
-        const int ty = target.empty() ? y : y + int(target.at(x, y, 1));
-        const size_t p = size_t(y) * W + x;
-        if (tx < 0 || ty < 0 || tx >= W || ty >= H || claimed[size_t(ty) * W + tx] || masked_out(p)) continue;
-        const size_t q = size_t(ty) * W + tx;
-        claimed[q] = 1;
-        out.next_offset[base + p] = int32_t(int64_t(q) - int64_t(p));
-        out.prev_source[next + q] = int32_t(base + p);
-      }
-  });
+  // One pass over the window's sources; with `only_same_pixel` a source whose
+  // offset is not zero gets no target (and takes none from another source).
+  const auto claim = [&](bool only_same_pixel) {
+    out.next_offset.assign(g.size(), TemporalTargets::kNone);
+    out.prev_source.assign(g.size(), -1);
+    tbb::parallel_for(0, std::max(0, g.frames - 1), [&](int t) {
+      const GradientFrame& frame = *window.frames[size_t(t)];
+      const Image& target = frame.temporal_target;
+      // A pixel whose temporal constraints are all masked claims no target, so
+      // that it cannot take one from a source whose constraints hold.
+      const auto masked_out = [&](size_t p) {
+        bool any = false;
+        for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) {
+          if (!frame.has(term)) continue;
+          if (frame.mask(term).empty() || frame.mask(term)[p]) return false;
+          any = true;
+        }
+        return any;
+      };
+      const size_t base = size_t(t) * g.frame_size(), next = base + g.frame_size();
+      std::vector<uint8_t> claimed(g.frame_size(), 0);
+      // Scan order decides which of two sources keeps a shared target.
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          const int tx = target.empty() ? x : x + int(target.at(x, y, 0));
+          const int ty = target.empty() ? y : y + int(target.at(x, y, 1));
+          const size_t p = size_t(y) * W + x;
+          if (tx < 0 || ty < 0 || tx >= W || ty >= H || claimed[size_t(ty) * W + tx] || masked_out(p)) continue;
+          if (only_same_pixel && (tx != x || ty != y)) continue;
+          const size_t q = size_t(ty) * W + tx;
+          claimed[q] = 1;
+          out.next_offset[base + p] = int32_t(int64_t(q) - int64_t(p));
+          out.prev_source[next + q] = int32_t(base + p);
+        }
+    });
+  };
+  claim(/*only_same_pixel=*/false);
+  size_t lands = 0, moving = 0;
+  for (size_t i = 0; i < out.next_offset.size(); ++i)
+    if (out.lands(i)) {
+      ++lands;
+      moving += out.next_offset[i] != 0;
+    }
+  if (double(moving) < kMinMovingShare * double(lands)) {
+    // Again without the moving sources, so that a pixel whose target one of
+    // them took gets its own back.
+    claim(/*only_same_pixel=*/true);
+    out.all_same_pixel = true;
+  }
   return out;
 }
 

@@ -32,7 +32,12 @@ struct TemporalTargets {
   std::vector<int32_t> next_offset;
   std::vector<int32_t> prev_source;
 
-  bool empty() const { return next_offset.empty(); }
+  // Every constraint that kept its target stays on its own pixel (those that
+  // moved were dropped: see kMinMovingShare), so the stencil applies them.
+  bool all_same_pixel = false;
+
+  // No map, or one the stencil applies: the solvers' same-pixel paths.
+  bool empty() const { return next_offset.empty() || all_same_pixel; }
   // next_offset of a pixel without a target (outside the image, another
   // source landed there first, or the window's last frame).
   static constexpr int32_t kNone = INT32_MIN;
@@ -40,10 +45,20 @@ struct TemporalTargets {
 };
 
 struct GradientWindow;
+// Below this share of a window's temporal constraints leaving their pixel,
+// the few that do are dropped rather than paying the gather passes for
+// every pixel (1.5-2.2x the stencil's solve time, docs/benchmarks.md): their
+// pixels keep their spatial terms, the rest the vectorised stencil. Shares
+// measured on the four animations of docs/benchmarks.md: 4 % on the demo
+// (a box moving under a slow camera), 31 % stiff, 81 % textured, 98 % indirect.
+constexpr double kMinMovingShare = 0.1;
+
 // The window's map, from each frame's GradientFrame::temporal_target (frames
 // without one link the same pixel; pixels whose temporal terms are all masked
 // link nothing); empty when every offset of frames
-// 0..W−2 is zero, so windows without motion keep the stencil.
+// 0..W−2 is zero, so windows without motion keep the stencil, and
+// all_same_pixel (with the moving constraints left without a target) when
+// fewer than kMinMovingShare of them move.
 TemporalTargets build_temporal_targets(const GradientWindow& window);
 
 // Per-constraint values of the three temporal terms, interleaved per pixel

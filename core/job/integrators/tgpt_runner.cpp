@@ -6,6 +6,7 @@
 
 #include "core/job/integrators/gradient_domain_frame.h"
 #include "core/recon/reconstruct.h"
+#include "core/recon/temporal_targets.h"
 #include "core/render/feature_buffers.h"
 #include "core/temporal/change_detection.h"
 #include "core/temporal/pass_schedule.h"
@@ -147,18 +148,21 @@ constexpr double kWindowOverCalibrationCost = 1.5;
 // animations and budgets, one run each: 1.03–1.62, median 1.2.
 constexpr double kMotionFollowingSolveCost = 1.2;
 
-// Whether any pixel's surface moves by half a pixel or more towards the next
-// frame (the forward motion field, layer "motion"), i.e. whether the
-// motion-following constraints leave the same pixel.
-bool moves_whole_pixels(const LayeredImage& layers) {
+// Whether the window solve will follow the motion (core/recon/temporal_targets.h):
+// whether at least kMinMovingShare of the pixels whose surface has a motion
+// vector (the forward field, layer "motion") move by half a pixel or more.
+bool solve_follows_motion(const LayeredImage& layers) {
   const ImageLayer* motion = layers.find("motion");
   if (!motion || motion->image.channels() != 3) return false;
   const Image& m = motion->image;
+  size_t valid = 0, moving = 0;
   for (int y = 0; y < m.height(); ++y)
-    for (int x = 0; x < m.width(); ++x)
-      if (m.at(x, y, 2) != 0.0f && (motion_pixel_offset(m.at(x, y, 0)) != 0 || motion_pixel_offset(m.at(x, y, 1)) != 0))
-        return true;
-  return false;
+    for (int x = 0; x < m.width(); ++x) {
+      if (m.at(x, y, 2) == 0.0f) continue;
+      ++valid;
+      moving += motion_pixel_offset(m.at(x, y, 0)) != 0 || motion_pixel_offset(m.at(x, y, 1)) != 0;
+    }
+  return valid > 0 && double(moving) >= kMinMovingShare * double(valid);
 }
 
 // Before anything is measured (the first frame's plan only): seconds per
@@ -226,7 +230,7 @@ void TgptRunner::calibrate_stage2(const LayeredImage& layers, FrameTimeBudget* b
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   budget->record_one_off(seconds);
   if (!solved.ok()) return;
-  const double motion = settings_.compensates_motion() && moves_whole_pixels(layers) ? kMotionFollowingSolveCost : 1.0;
+  const double motion = settings_.compensates_motion() && solve_follows_motion(layers) ? kMotionFollowingSolveCost : 1.0;
   budget->set_stage2_prior(seconds / 2 * kWindowOverCalibrationCost * motion * window_frames_per_frame());
 }
 

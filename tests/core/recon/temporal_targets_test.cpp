@@ -88,6 +88,45 @@ TEST(TemporalTargetsTest, TargetsAreOneToOneAndInsideTheImage) {
     if (r.layout.mask(Term::kDt)[i]) EXPECT_TRUE(to.lands(i));
 }
 
+// Where few constraints leave their pixel, those few are dropped and the
+// rest stay with the stencil (kMinMovingShare).
+TEST(TemporalTargetsTest, AFewMovingConstraintsAreDroppedForTheStencil) {
+  RandomWindow r = random_window(7);
+  const int w = r.window.width(), h = r.window.height();
+  // Every offset zero but two pixels of frame 1: 2 of 189 sources move.
+  for (int t = 0; t < r.window.size(); ++t) {
+    GradientFrame& f = test::mutable_frame(r.window, t);
+    for (float& v : f.temporal_target.data()) v = 0.0f;
+    for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) f.mask(term).assign(size_t(w) * h, 1);
+  }
+  test::mutable_frame(r.window, 1).temporal_target.at(2, 3, 0) = 1.0f;
+  test::mutable_frame(r.window, 1).temporal_target.at(5, 1, 1) = -1.0f;
+  const ConstraintLayout layout = build_constraint_layout(r.window);
+  EXPECT_TRUE(layout.targets.all_same_pixel);
+  EXPECT_TRUE(layout.targets.empty());  // the solvers take the stencil
+  const Grid& g = layout.grid;
+  for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) {
+    EXPECT_EQ(layout.mask(term)[g.index(2, 3, 1)], 0) << term_name(term);
+    EXPECT_EQ(layout.mask(term)[g.index(5, 1, 1)], 0) << term_name(term);
+    EXPECT_EQ(layout.mask(term)[g.index(2, 3, 0)], 1) << term_name(term);
+    EXPECT_EQ(layout.masked[term_index(term)], 2) << term_name(term);
+  }
+  // Exactly the stencil's system with those two constraints masked by the caller.
+  GradientWindow masked = r.window;
+  for (auto& frame : masked.frames) {
+    auto copy = std::make_shared<GradientFrame>(*frame);
+    copy->temporal_target = Image();
+    frame = copy;
+  }
+  for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) {
+    GradientFrame& f = test::mutable_frame(masked, 1);
+    f.mask(term)[size_t(3) * w + 2] = 0;
+    f.mask(term)[size_t(1) * w + 5] = 0;
+  }
+  const ConstraintLayout expected = build_constraint_layout(masked);
+  for (Term term : kAllTerms) EXPECT_EQ(layout.mask(term), expected.mask(term)) << term_name(term);
+}
+
 // A, b and diag(A) of both weight modes equal Hᵀ W H etc. assembled from the definitions.
 TEST(TemporalTargetsTest, OperatorRhsAndDiagonalMatchTheNormalEquations) {
   for (unsigned seed : {1u, 2u, 5u}) {
