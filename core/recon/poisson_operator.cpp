@@ -179,7 +179,7 @@ void PoissonSystem::add_temporal_adjoint(Value&& value, bool absolute, float* ou
   tbb::parallel_for(tbb::blocked_range<size_t>(0, grid_.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i)
       for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt})
-        h[size_t(kTemporalTerms) * i + size_t(temporal_slot(t))] = temporal_weight(term_index(t), i) * value(t, i);
+        h[size_t(kTemporalTerms) * i + size_t(temporal_slot(t))] = weight_at(t, i) * value(t, i);
   });
   temporal_targets_adjoint(grid_, *temporal_targets_, h, absolute, out);
 }

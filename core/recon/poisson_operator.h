@@ -67,11 +67,6 @@ class PoissonSystem {
   bool stencil_temporal() const { return temporal_ && !follows_motion(); }
   // Adds the motion-following temporal terms' part of A p to q; returns its p·(A p).
   double apply_temporal_targets_part(const float* p, float* q) const;
-  // Weight of temporal term k (a term_index) at pixel i, in either mode.
-  float temporal_weight(int k, size_t i) const {
-    if (!masked_) return w_[k][i];
-    return ((bits_[i] >> k) & 1) ? term_w_[k] : 0.0f;
-  }
   // Fills temporal_scratch_ with w · value(term, i) per temporal constraint
   // and adds its adjoint to *out.
   template <typename Value>

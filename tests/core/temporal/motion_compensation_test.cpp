@@ -18,6 +18,7 @@
 #include "core/temporal/replay_map.h"
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/tgpt_frame.h"
+#include "seed_mean_z.h"
 
 namespace gdvr {
 namespace {
@@ -442,8 +443,7 @@ TEST(TemporalMotionCompensationTest, CompensatedGradientsMatchConvergedFrames) {
       }
   }
   for (int t = 0; t < 3; ++t) {
-    double z2 = 0, sum_d = 0, sum_v = 0;
-    int count = 0;
+    test::SeedMeanZ z;
     for (int y = 0; y < kRes; ++y)
       for (int x = 0; x < kRes; ++x) {
         if (!valid[size_t(y) * kRes + x]) continue;
@@ -458,27 +458,15 @@ TEST(TemporalMotionCompensationTest, CompensatedGradientsMatchConvergedFrames) {
             fd_var += ref_var[1].at(qx, qy, c) + ref_var[0].at(x, y, c);
           }
           const size_t k = size_t(t) * n + (size_t(y) * kRes + size_t(x)) * 3 + size_t(c);
-          const double mean = sum[k] / kSeeds;
-          const double var = std::max(0.0, (sum_sq[k] - kSeeds * mean * mean) / (kSeeds - 1)) / kSeeds;
-          const double d = mean - fd, v = var + fd_var;
-          if (!(v > 1e-12)) {
-            EXPECT_NEAR(d, 0.0, 1e-4);
-            continue;
-          }
-          z2 += d * d / v;
-          sum_d += d;
-          sum_v += v;
-          ++count;
+          z.add(sum[k], sum_sq[k], kSeeds, fd, fd_var);
         }
       }
-    z2 /= std::max(1, count);
-    const double agg = sum_v > 0 ? sum_d / std::sqrt(sum_v) : 0;
     std::printf("[ motion compensation ] %s: mean z^2 %.3f over %d, aggregate z %.2f\n",
-                t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt", z2, count, agg);
-    ASSERT_GT(count, kRes * kRes);
+                t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt", z.mean_z2(), z.count, z.aggregate_z());
+    ASSERT_GT(z.count, kRes * kRes);
     // Student t with 11 dof: E[z^2] = 11/9; a biased estimator shows as a clear excess.
-    EXPECT_LT(z2, 1.8);
-    EXPECT_LT(std::abs(agg), 4.5);
+    EXPECT_LT(z.mean_z2(), 1.8);
+    EXPECT_LT(std::abs(z.aggregate_z()), 4.5);
   }
 }
 

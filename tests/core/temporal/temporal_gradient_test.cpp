@@ -14,6 +14,7 @@
 #include "core/temporal/temporal_buffers.h"
 #include "core/temporal/tgpt_frame.h"
 #include "tests/core/temporal/render_buffers.h"
+#include "seed_mean_z.h"
 
 namespace gdvr {
 namespace {
@@ -150,31 +151,15 @@ TEST_P(TemporalGradientTest, MeanEqualsFiniteDifferenceOfConvergedFrames) {
   for (size_t k = 0; k < n; ++k) moved += std::abs(fd[k]);
   EXPECT_GT(moved, 1e-3) << "the test needs a visible change between the frames";
   for (int t = 0; t < 3; ++t) {
-    double z2 = 0, sum_d = 0, sum_v = 0, sum_est_var = 0;
-    int count = 0;
-    for (size_t k = t * n; k < (t + 1) * n; ++k) {
-      if (!defined[k]) continue;
-      const double mean = sum[k] / kSeeds;
-      const double var = std::max(0.0, (sum_sq[k] - kSeeds * mean * mean) / (kSeeds - 1)) / kSeeds;
-      const double d = mean - fd[k], v = var + fd_var[k];
-      sum_est_var += var * kSeeds;  // one seed's variance
-      if (!(v > 1e-12)) {
-        EXPECT_NEAR(d, 0.0, 1e-4);
-        continue;
-      }
-      z2 += d * d / v;
-      sum_d += d;
-      sum_v += v;
-      ++count;
-    }
-    z2 /= std::max(1, count);
-    const double agg = sum_v > 0 ? sum_d / std::sqrt(sum_v) : 0;
+    test::SeedMeanZ z;
+    for (size_t k = t * n; k < (t + 1) * n; ++k)
+      if (defined[k]) z.add(sum[k], sum_sq[k], kSeeds, fd[k], fd_var[k]);
     std::printf("[ temporal ] %s/%s/%s: mean z^2 %.3f over %d, aggregate z %.2f, estimator variance %.3g\n",
-                tc.temporal_shift, case_name(tc), t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt", z2, count, agg,
-                sum_est_var / std::max(1, count));
+                tc.temporal_shift, case_name(tc), t == 0 ? "dt" : t == 1 ? "dxdt" : "dydt", z.mean_z2(), z.count,
+                z.aggregate_z(), z.sum_seed_var / std::max(1, z.count));
     // Student t with 11 dof: E[z^2] = 11/9; a biased estimator shows as a clear excess.
-    EXPECT_LT(z2, 1.8);
-    EXPECT_LT(std::abs(agg), 4.5);
+    EXPECT_LT(z.mean_z2(), 1.8);
+    EXPECT_LT(std::abs(z.aggregate_z()), 4.5);
   }
 }
 
