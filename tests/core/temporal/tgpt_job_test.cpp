@@ -89,6 +89,8 @@ TEST_P(TgptJobTest, StaticShotHasExactlyZeroTemporalGradients) {
     // Pass A of frames 1..3 is the previous pass B, copied, not rendered.
     EXPECT_EQ(has(f.stats.left_out, "pass A: equals the previous frame's pass B"), f.frame > 0);
     EXPECT_EQ(f.stats.temporal_rays, 0u) << "a static shot traces no temporal ray";
+    // The path-space shift's dt is same-pixel: the frame says so.
+    EXPECT_EQ(has(f.stats.left_out, "motion compensation: not with temporal_shift reconnect"), GetParam() == "reconnect");
   }
 }
 
