@@ -249,9 +249,175 @@ void update_solution(float* x, float* p, const float* r, const float* M, float s
   }
 }
 
+// The weight of temporal term k (0 dt, 1 dxdt, 2 dydt) at column c.
+template <bool kMasked>
+inline float temporal_weight(const TemporalForwardLine& l, int k, int c) {
+  if constexpr (kMasked) return l.term_weight[k] * float((l.bits[c] >> (kBitDt + k)) & 1);
+  return l.weight[k][c];
+}
+
+// One pixel of the forward pass, reading its target wherever it lies. Where
+// a constraint does not exist its weight is 0 (PoissonSystem's contract), so
+// a pixel without a target may read itself (j = n), and the target's right
+// and lower neighbours are clamped into the grid.
+template <bool kMasked>
+inline void forward_pixel(const TemporalForwardLine& l, int c) {
+  const int64_t W = l.width, n = l.begin + c;
+  const int32_t o = l.next_offset[c];
+  const int64_t j = o != kNoTemporalTarget ? n + l.frame_size + o : n;
+  const int64_t jx = j + 1 < l.last ? j + 1 : l.last, jy = j + W < l.last ? j + W : l.last;
+  const float* x = l.x;
+  const float xi = x[n], xj = x[j];
+  l.h[0][c] = temporal_weight<kMasked>(l, 0, c) * (xj - xi);
+  l.h[1][c] = temporal_weight<kMasked>(l, 1, c) * ((x[jx] - xj) - (x[n + 1] - xi));
+  l.h[2][c] = temporal_weight<kMasked>(l, 2, c) * ((x[jy] - xj) - (x[n + W] - xi));
+}
+
+// Columns [c0, c1) whose landing pixels all have offset o (the caller checked
+// that every read is inside the grid; a pixel without a target reads the
+// shared offset's, under weight 0): forward_pixel's arithmetic on contiguous
+// reads, so it vectorises. Everything the loop reads is a local
+// (a read through `l` could alias the stores and keep it scalar).
+template <bool kMasked>
+void forward_block(const TemporalForwardLine& l, int c0, int c1, int32_t o) {
+  const int64_t W = l.width;
+  const float* __restrict own = l.x + l.begin;
+  const float* __restrict own_below = own + W;
+  const float* __restrict target = l.x + (l.begin + l.frame_size + o);
+  const float* __restrict target_below = target + W;
+  const uint8_t* __restrict bits = l.bits;
+  const float* __restrict w0 = l.weight[0];
+  const float* __restrict w1 = l.weight[1];
+  const float* __restrict w2 = l.weight[2];
+  const float tw0 = l.term_weight[0], tw1 = l.term_weight[1], tw2 = l.term_weight[2];
+  float* __restrict h0 = l.h[0];
+  float* __restrict h1 = l.h[1];
+  float* __restrict h2 = l.h[2];
+  // As in apply_interior: without the promise GCC needs more runtime alias
+  // checks than it allows and keeps the loop scalar.
+#pragma GCC ivdep
+  for (int c = c0; c < c1; ++c) {
+    float a0, a1, a2;
+    if constexpr (kMasked) {
+      a0 = tw0 * float((bits[c] >> kBitDt) & 1);
+      a1 = tw1 * float((bits[c] >> kBitDxdt) & 1);
+      a2 = tw2 * float((bits[c] >> kBitDydt) & 1);
+    } else {
+      a0 = w0[c], a1 = w1[c], a2 = w2[c];
+    }
+    const float xi = own[c], xj = target[c];
+    h0[c] = a0 * (xj - xi);
+    h1[c] = a1 * ((target[c + 1] - xj) - (own[c + 1] - xi));
+    h2[c] = a2 * ((target_below[c] - xj) - (own_below[c] - xi));
+  }
+}
+
+template <bool kMasked>
+void forward_line(const TemporalForwardLine& l) {
+  forward_pixel<kMasked>(l, 0);
+  for (int b = 0, c0 = 1; c0 < l.width;) {
+    // A run of blocks with one offset is one loop (a block is short for a
+    // vector loop's entry and exit).
+    const int32_t o = l.block_offset[b];
+    int end = b + 1;
+    while (o != kScatteredBlock && 1 + end * kTargetBlock < l.width && l.block_offset[end] == o) ++end;
+    const int c1 = min_int(l.width, 1 + end * kTargetBlock);
+    if (o != kScatteredBlock)
+      forward_block<kMasked>(l, c0, c1, o);
+    else
+      for (int c = c0; c < c1; ++c) forward_pixel<kMasked>(l, c);
+    b = end;
+    c0 = c1;
+  }
+}
+
+void temporal_forward_line(const TemporalForwardLine& line) {
+  if (line.masked)
+    forward_line<true>(line);
+  else
+    forward_line<false>(line);
+}
+
+// (Hᵀ h)(n) at column c, reading each source wherever it lies. As a source,
+// x_t(n) has coefficient −1 in its dt, +1 in its dxdt and dydt, and −1 in
+// the dxdt (dydt) of its left (upper) neighbour; as the target of source
+// k = prev_source[n]: +1 in dt, −1 in dxdt and dydt, and +1 as the right
+// (lower) neighbour of the target of the source landing left of (above) it.
+inline float adjoint_pixel(const TemporalAdjointLine& l, int c) {
+  const int64_t W = l.width, n = l.begin + c;
+  const float *h0 = l.h[0], *h1 = l.h[1], *h2 = l.h[2];
+  const float m = l.minus;
+  const float left = c > 0 ? h1[n - 1] : 0.0f, above = l.up ? h2[n - W] : 0.0f;
+  float s = m * h0[n] + h1[n] + h2[n] + m * (left + above);
+  const int32_t k = l.prev_source[n];
+  const int32_t kl = c > 0 ? l.prev_source[n - 1] : -1, ku = l.up ? l.prev_source[n - W] : -1;
+  const float s0 = k >= 0 ? h0[k] : 0.0f, s1 = k >= 0 ? h1[k] : 0.0f, s2 = k >= 0 ? h2[k] : 0.0f;
+  const float sl = kl >= 0 ? h1[kl] : 0.0f, sa = ku >= 0 ? h2[ku] : 0.0f;
+  return s + (s0 + m * (s1 + s2) + sl + sa);
+}
+
+// Columns [c0, c1), c0 ≥ 1, whose sources (own, left and upper neighbours')
+// all lie at m − d (the caller checked that every read is inside the grid):
+// adjoint_pixel's arithmetic on contiguous reads (a missing source adds ±0
+// here, +0 there).
+template <bool kUp>
+void adjoint_block(const TemporalAdjointLine& l, int c0, int c1, int32_t d, float* __restrict v) {
+  const int64_t W = l.width, n0 = l.begin;
+  const float* __restrict h0 = l.h[0];
+  const float* __restrict h1 = l.h[1];
+  const float* __restrict h2 = l.h[2];
+  const int32_t* __restrict prev = l.prev_source;
+  const float m = l.minus;
+  for (int c = c0; c < c1; ++c) {
+    const int64_t n = n0 + c;
+    const float above = kUp ? h2[n - W] : 0.0f;
+    const float s = m * h0[n] + h1[n] + h2[n] + m * (h1[n - 1] + above);
+    // A factor 0 or 1, not a branch: GCC keeps a select of loads scalar.
+    const float has = float(prev[n] >= 0), has_left = float(prev[n - 1] >= 0);
+    const float s0 = has * h0[n - d], s1 = has * h1[n - d], s2 = has * h2[n - d];
+    const float sl = has_left * h1[n - 1 - d];
+    float sa = 0.0f;
+    if constexpr (kUp) sa = float(prev[n - W] >= 0) * h2[n - W - d];
+    v[c] = s + (s0 + m * (s1 + s2) + sl + sa);
+  }
+}
+
+float temporal_adjoint_line(const TemporalAdjointLine& l) {
+  const int W = l.width;
+  float* v = l.v;
+  v[0] = adjoint_pixel(l, 0);
+  for (int b = 0, c0 = 1; c0 < W;) {
+    const int32_t d = l.block_source[b];
+    int end = b + 1;
+    while (d != kScatteredBlock && 1 + end * kTargetBlock < W && l.block_source[end] == d) ++end;
+    const int c1 = min_int(W, 1 + end * kTargetBlock);
+    if (d == kScatteredBlock)
+      for (int c = c0; c < c1; ++c) v[c] = adjoint_pixel(l, c);
+    else if (l.up)
+      adjoint_block<true>(l, c0, c1, d, v);
+    else
+      adjoint_block<false>(l, c0, c1, d, v);
+    b = end;
+    c0 = c1;
+  }
+  float* out = l.out;
+  for (int c = 0; c < W; ++c) out[c] += v[c];
+  if (!l.dot_with) return 0.0f;
+  // Eight partial sums, as the CG passes keep.
+  const float* p = l.dot_with;
+  float part[8] = {};
+  int c = 0;
+  for (; c + 8 <= W; c += 8)
+    for (int k = 0; k < 8; ++k) part[k] += p[c + k] * v[c + k];
+  for (; c < W; ++c) part[c % 8] += p[c] * v[c];
+  return ((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7]));
+}
+
 }  // namespace
 
 extern const PoissonKernels GDVR_POISSON_KERNELS;
-const PoissonKernels GDVR_POISSON_KERNELS = {GDVR_POISSON_KERNELS_ISA, apply_line, update_residual, update_solution};
+const PoissonKernels GDVR_POISSON_KERNELS = {GDVR_POISSON_KERNELS_ISA,    apply_line,           update_residual,
+                                             update_solution,             temporal_forward_line,
+                                             temporal_adjoint_line};
 
 }  // namespace gdvr

@@ -154,34 +154,41 @@ double PoissonSystem::apply(const float* p, float* q) const {
 
 void PoissonSystem::follow_temporal_targets(const TemporalTargets* targets) {
   temporal_targets_ = targets && !targets->empty() && temporal_ ? targets : nullptr;
-  if (temporal_targets_) temporal_scratch_.resize(size_t(kTemporalTerms) * grid_.size());
+  if (!temporal_targets_) return;
+  target_blocks_ = classify_target_blocks(grid_, *temporal_targets_);
+  temporal_scratch_.resize(size_t(kTemporalTerms) * grid_.size());
+}
+
+std::array<float*, kTemporalTerms> PoissonSystem::temporal_planes() const {
+  float* h = temporal_scratch_.data();
+  return {h, h + grid_.size(), h + 2 * grid_.size()};
 }
 
 double PoissonSystem::apply_temporal_targets_part(const float* p, float* q) const {
-  float* h = temporal_scratch_.data();
-  // The weight mode is fixed per system: decided here, not per constraint.
-  if (masked_) {
-    const uint8_t* bits = bits_.data();
-    const std::array<float, kTermCount> w = term_w_;
-    apply_temporal_targets(grid_, *temporal_targets_, p,
-                           [&](int k, size_t i) { return ((bits[i] >> k) & 1) ? w[size_t(k)] : 0.0f; }, h);
-  } else {
-    const float* w[kTermCount] = {};
-    for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt}) w[term_index(t)] = w_[term_index(t)].data();
-    apply_temporal_targets(grid_, *temporal_targets_, p, [&](int k, size_t i) { return w[k][i]; }, h);
+  const std::array<float*, kTemporalTerms> h = temporal_planes();
+  TemporalWeights w;
+  for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt}) {
+    const int k = temporal_slot(t);
+    if (masked_) {
+      w.term_weight[k] = term_w_[term_index(t)];
+    } else {
+      w.weight[k] = w_[term_index(t)].data();
+    }
   }
-  return temporal_targets_adjoint(grid_, *temporal_targets_, h, /*absolute=*/false, q, p);
+  if (masked_) w.bits = bits_.data();
+  apply_temporal_targets(grid_, *temporal_targets_, target_blocks_, p, w, h.data());
+  return temporal_targets_adjoint(grid_, *temporal_targets_, target_blocks_, h.data(), /*absolute=*/false, q, p);
 }
 
 template <typename Value>
 void PoissonSystem::add_temporal_adjoint(Value&& value, bool absolute, float* out) const {
-  float* h = temporal_scratch_.data();
+  const std::array<float*, kTemporalTerms> h = temporal_planes();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, grid_.size(), kChunkPixels), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i != r.end(); ++i)
       for (Term t : {Term::kDt, Term::kDxdt, Term::kDydt})
-        h[size_t(kTemporalTerms) * i + size_t(temporal_slot(t))] = weight_at(t, i) * value(t, i);
+        h[size_t(temporal_slot(t))][i] = weight_at(t, i) * value(t, i);
   });
-  temporal_targets_adjoint(grid_, *temporal_targets_, h, absolute, out);
+  temporal_targets_adjoint(grid_, *temporal_targets_, target_blocks_, h.data(), absolute, out);
 }
 
 // Mask mode: v_c = w_c d_c with constant w_c and d_c = 0 where constraint c

@@ -67,6 +67,8 @@ class PoissonSystem {
   bool stencil_temporal() const { return temporal_ && !follows_motion(); }
   // Adds the motion-following temporal terms' part of A p to q; returns its p·(A p).
   double apply_temporal_targets_part(const float* p, float* q) const;
+  // The three planes of temporal_scratch_ (dt, dxdt, dydt).
+  std::array<float*, kTemporalTerms> temporal_planes() const;
   // Fills temporal_scratch_ with w · value(term, i) per temporal constraint
   // and adds its adjoint to *out.
   template <typename Value>
@@ -92,7 +94,8 @@ class PoissonSystem {
   // that span's stencil reads (ConstWeights apply); all ones for outside lines.
   std::vector<uint8_t> uniform_spans_, all_uniform_;
   const TemporalTargets* temporal_targets_ = nullptr;
-  // Per-constraint values of the motion-following terms (interleaved dt,
+  TemporalTargetBlocks target_blocks_;
+  // Per-constraint values of the motion-following terms (three planes: dt,
   // dxdt, dydt); apply() is called by one CG at a time.
   mutable Field temporal_scratch_;
 };

@@ -2,8 +2,11 @@
 
 #include "core/recon/gradient_window.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <functional>
 
 namespace gdvr {
@@ -72,61 +75,109 @@ TemporalTargets build_temporal_targets(const GradientWindow& window) {
   return out;
 }
 
-namespace {
-
-// One line of the adjoint into v[0, W): pixel i = begin + x. `up` says whether
-// the line above is in the same frame. Plain pointers, so that the loop keeps
-// nothing in memory that a store could alias.
-void adjoint_line(const float* __restrict h, const int32_t* __restrict prev, int64_t begin, int64_t W, bool up,
-                  float minus, float* __restrict v) {
-  constexpr int kT = kTemporalTerms;
-  static const float kZeros[kT] = {0, 0, 0};
-  for (int64_t x = 0; x < W; ++x) {
-    const int64_t i = begin + x;
-    const float* own = h + kT * i;
-    const float* left = x > 0 ? own - kT : kZeros;
-    const float* above = up ? own - kT * W : kZeros;
-    // Pixel i as a source: x_t(i) has coefficient −1 in dt, +1 in dxdt and
-    // dydt, and −1 in the dxdt / dydt of its left / upper neighbour.
-    float s = minus * own[0] + own[1] + own[2] + minus * (left[1] + above[2]);
-    // Pixel i as the target j of the source prev[i]: +1 in dt, −1 in dxdt
-    // and dydt; as j + e_x (j + e_y) of the source landing left of (above)
-    // it: +1. prev is −1 throughout the window's first frame.
-    const int32_t k = prev[i];
-    const int32_t kl = x > 0 ? prev[i - 1] : -1;
-    const int32_t ku = up ? prev[i - W] : -1;
-    const float* src = k >= 0 ? h + kT * int64_t(k) : kZeros;
-    const float* src_left = kl >= 0 ? h + kT * int64_t(kl) : kZeros;
-    const float* src_above = ku >= 0 ? h + kT * int64_t(ku) : kZeros;
-    s += src[0] + minus * (src[1] + src[2]) + src_left[1] + src_above[2];
-    v[x] = s;
-  }
+TemporalTargetBlocks classify_target_blocks(const Grid& g, const TemporalTargets& targets) {
+  TemporalTargetBlocks out;
+  out.per_line = target_blocks_per_line(g.width);
+  const size_t blocks = size_t(g.rows()) * size_t(out.per_line);
+  out.next.assign(blocks, kScatteredBlock);
+  out.source.assign(blocks, kScatteredBlock);
+  if (targets.next_offset.empty()) return out;
+  const int64_t W = g.width, fs = int64_t(g.frame_size()), size = int64_t(g.size());
+  const int32_t* next = targets.next_offset.data();
+  const int32_t* prev = targets.prev_source.data();
+  tbb::parallel_for(0, g.rows(), [&](int row) {
+    const bool forward = row / g.height < g.frames - 1, up = row % g.height != 0;
+    const int64_t n0 = int64_t(row) * W;
+    for (int b = 0; b < out.per_line; ++b) {
+      const int64_t c0 = 1 + int64_t(b) * kTargetBlock, c1 = std::min<int64_t>(W, c0 + kTargetBlock);
+      const size_t at = size_t(row) * size_t(out.per_line) + size_t(b);
+      if (forward) {
+        // Pixels without a target read the shared one's neighbourhood and keep 0.
+        int64_t o = 0;
+        bool found = false, shared = true;
+        for (int64_t c = c0; c < c1; ++c) {
+          const int32_t oc = next[n0 + c];
+          if (oc == TemporalTargets::kNone) continue;
+          shared &= !found || oc == o;
+          o = oc;
+          found = true;
+        }
+        // Reads x[j], x[j + 1], x[j + W] for j = n + frame_size + o.
+        if (shared && n0 + c0 + fs + o >= 0 && n0 + c1 - 1 + fs + o + W <= size - 1) out.next[at] = int32_t(o);
+      }
+      int64_t d = 0;
+      bool found = false, shared = true;
+      const auto see = [&](int64_t m) {
+        if (prev[m] < 0) return;
+        shared &= !found || m - prev[m] == d;
+        d = m - prev[m];
+        found = true;
+      };
+      for (int64_t c = c0; c < c1; ++c) {
+        see(n0 + c);
+        see(n0 + c - 1);
+        if (up) see(n0 + c - W);
+      }
+      // Reads h at n − d, n − 1 − d and (up) n − W − d.
+      const int64_t lowest = n0 + c0 - (up ? W : 1) - d, highest = n0 + c1 - 1 - d;
+      if (shared && lowest >= 0 && highest < size && d > INT32_MIN && d <= INT32_MAX) out.source[at] = int32_t(d);
+    }
+  });
+  return out;
 }
 
-}  // namespace
+void apply_temporal_targets(const Grid& g, const TemporalTargets& targets, const TemporalTargetBlocks& blocks,
+                            const float* x, const TemporalWeights& w, float* const h[kTemporalTerms]) {
+  const size_t fs = g.frame_size(), last_frame = g.frames > 0 ? size_t(g.frames - 1) * fs : 0;
+  // The last frame has no constraints towards a next frame.
+  for (int k = 0; k < kTemporalTerms; ++k) std::fill(h[k] + last_frame, h[k] + g.size(), 0.0f);
+  const PoissonKernels& kernels = poisson_kernels();
+  const int64_t W = g.width;
+  tbb::parallel_for(tbb::blocked_range<int64_t>(0, int64_t(last_frame) / W, std::max<int64_t>(1, 16384 / W)),
+                    [&](const tbb::blocked_range<int64_t>& rows) {
+    TemporalForwardLine l;
+    l.x = x;
+    l.width = g.width;
+    l.frame_size = int64_t(fs);
+    l.last = int64_t(g.size()) - 1;
+    l.masked = w.bits != nullptr;
+    for (int k = 0; k < kTemporalTerms; ++k) l.term_weight[k] = w.term_weight[k];
+    for (int64_t row = rows.begin(); row != rows.end(); ++row) {
+      l.begin = row * W;
+      l.next_offset = targets.next_offset.data() + l.begin;
+      l.block_offset = blocks.next.data() + row * blocks.per_line;
+      if (l.masked) l.bits = w.bits + l.begin;
+      for (int k = 0; k < kTemporalTerms; ++k) {
+        if (!l.masked) l.weight[k] = w.weight[k] + l.begin;
+        l.h[k] = h[k] + l.begin;
+      }
+      kernels.temporal_forward_line(l);
+    }
+  });
+}
 
-double temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const float* h, bool absolute,
-                                float* out, const float* dot_with) {
+double temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const TemporalTargetBlocks& blocks,
+                                const float* const h[kTemporalTerms], bool absolute, float* out,
+                                const float* dot_with) {
   const int64_t W = g.width, H = g.height;
-  const float minus = absolute ? 1.0f : -1.0f;
-  const int32_t* prev = targets.prev_source.data();
+  const PoissonKernels& kernels = poisson_kernels();
   return tbb::parallel_deterministic_reduce(
       tbb::blocked_range<int64_t>(0, int64_t(g.rows()), std::max<int64_t>(1, 16384 / W)), 0.0,
       [&](const tbb::blocked_range<int64_t>& rows, double acc) {
         std::vector<float> v(static_cast<size_t>(W));
+        TemporalAdjointLine l;
+        for (int k = 0; k < kTemporalTerms; ++k) l.h[k] = h[k];
+        l.width = g.width;
+        l.prev_source = targets.prev_source.data();
+        l.minus = absolute ? 1.0f : -1.0f;
+        l.v = v.data();
         for (int64_t row = rows.begin(); row != rows.end(); ++row) {
-          adjoint_line(h, prev, row * W, W, row % H != 0, minus, v.data());
-          float* __restrict o = out + row * W;
-          for (int64_t x = 0; x < W; ++x) o[x] += v[size_t(x)];
-          if (!dot_with) continue;
-          // Eight partial sums, as the CG kernels keep (poisson_kernels.h).
-          const float* __restrict p = dot_with + row * W;
-          float part[8] = {};
-          int64_t x = 0;
-          for (; x + 8 <= W; x += 8)
-            for (int l = 0; l < 8; ++l) part[l] += p[x + l] * v[size_t(x + l)];
-          for (; x < W; ++x) part[x % 8] += p[x] * v[size_t(x)];
-          acc += ((part[0] + part[1]) + (part[2] + part[3])) + ((part[4] + part[5]) + (part[6] + part[7]));
+          l.begin = row * W;
+          l.up = row % H != 0;
+          l.block_source = blocks.source.data() + row * blocks.per_line;
+          l.out = out + l.begin;
+          l.dot_with = dot_with ? dot_with + l.begin : nullptr;
+          acc += kernels.temporal_adjoint_line(l);
         }
         return acc;
       },

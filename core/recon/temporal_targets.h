@@ -15,11 +15,11 @@
 // windows without motion.
 #pragma once
 
-#include <climits>
 #include <cstdint>
 #include <vector>
 
 #include "core/recon/grid.h"
+#include "core/recon/poisson_kernels.h"
 #include "core/recon/term.h"
 
 namespace gdvr {
@@ -40,7 +40,7 @@ struct TemporalTargets {
   bool empty() const { return next_offset.empty() || all_same_pixel; }
   // next_offset of a pixel without a target (outside the image, another
   // source landed there first, or the window's last frame).
-  static constexpr int32_t kNone = INT32_MIN;
+  static constexpr int32_t kNone = kNoTemporalTarget;
   bool lands(size_t i) const { return next_offset[i] != kNone; }
 };
 
@@ -61,27 +61,51 @@ constexpr double kMinMovingShare = 0.1;
 // fewer than kMinMovingShare of them move.
 TemporalTargets build_temporal_targets(const GradientWindow& window);
 
-// Per-constraint values of the three temporal terms, interleaved per pixel
-// (dt, dxdt, dydt; 0 where a term has no constraint), so that the adjoint's
-// reads at another pixel's constraint cost one cache line, not three.
+// The per-constraint values of the three temporal terms live in three planes
+// over the window's grid (dt, dxdt, dydt; 0 where a term has no constraint).
 constexpr int kTemporalTerms = 3;
 inline int temporal_slot(Term t) { return term_index(t) - term_index(Term::kDt); }
 
-// h[3i + slot(term)] = scale(term_index, i) · (H_term x)(i): scale is a
-// per-constraint weight that must be 0 where the constraint does not exist.
-// With temporal_targets_adjoint(h) this is the temporal part of A x. (Two
-// passes through h measured 1.7x faster than one pass that evaluates each
-// constraint where it is needed, on a 128² window of 20 frames.)
-template <typename Scale>
-void apply_temporal_targets(const Grid& g, const TemporalTargets& targets, const float* x, Scale&& scale, float* h);
+// Per line of the grid and block of kTargetBlock columns (from column 1,
+// core/recon/poisson_kernels.h): the offset all the block's targets share
+// (`next`), and the d with prev_source[m] = m − d for every pixel m of the
+// block, its left neighbour and (below a frame's first line) its upper
+// neighbour that has a source (`source`); kScatteredBlock where they differ or
+// a contiguous read would leave the grid. On a pan most blocks share one
+// offset, and the operator's passes read them as vectors (3.2x faster than
+// one pixel at a time; docs/benchmarks.md).
+struct TemporalTargetBlocks {
+  int per_line = 0;
+  std::vector<int32_t> next, source;  // index: line · per_line + block
+};
+inline int target_blocks_per_line(int width) { return width > 1 ? (width - 1 + kTargetBlock - 1) / kTargetBlock : 0; }
+TemporalTargetBlocks classify_target_blocks(const Grid& g, const TemporalTargets& targets);
+
+// The weights of the temporal terms: `bits` (the packed validity bytes of
+// PoissonSystem's mask mode) with a constant weight per term, or, where bits is
+// null, per-constraint float weights (planar over the grid).
+struct TemporalWeights {
+  const uint8_t* bits = nullptr;
+  float term_weight[kTemporalTerms] = {};
+  const float* weight[kTemporalTerms] = {};
+};
+
+// h[slot(term)][i] = w_term(i) · (H_term x)(i) for every pixel of frames
+// 0..W−2, and 0 in the last frame. With temporal_targets_adjoint(h) this is
+// the temporal part of A x. (Two passes through h measured 1.7x faster than
+// one pass that evaluates each constraint where it is needed, on a 128²
+// window of 20 frames.)
+void apply_temporal_targets(const Grid& g, const TemporalTargets& targets, const TemporalTargetBlocks& blocks,
+                            const float* x, const TemporalWeights& w, float* const h[kTemporalTerms]);
 
 // v(i) = Σ over the temporal constraints touching pixel i of c·h(constraint),
 // with c the coefficient of x(i) in that constraint (±1), or |c| = 1 when
 // `absolute` (the diagonal of Hᵀ W H is the adjoint of the weights with
 // absolute coefficients). out(i) += v(i); returns Σ dot_with(i)·v(i) when
 // `dot_with` is given (CG's p·Ap), else 0.
-double temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const float* h, bool absolute,
-                                float* out, const float* dot_with = nullptr);
+double temporal_targets_adjoint(const Grid& g, const TemporalTargets& targets, const TemporalTargetBlocks& blocks,
+                                const float* const h[kTemporalTerms], bool absolute, float* out,
+                                const float* dot_with = nullptr);
 
 // (H_term x)(i) for one temporal term at pixel i (the constraint must exist).
 inline float temporal_target_difference(const Grid& g, const TemporalTargets& targets, Term term, const float* x,
@@ -98,4 +122,3 @@ inline float temporal_target_difference(const Grid& g, const TemporalTargets& ta
 
 }  // namespace gdvr
 
-#include "core/recon/temporal_targets.inl"

@@ -4,9 +4,12 @@
 // panning window with a known answer.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <random>
 
 #include "core/recon/constraint_layout.h"
+#include "core/recon/poisson_kernels.h"
 #include "core/recon/poisson_operator.h"
 #include "core/recon/reconstruct.h"
 #include "core/recon/tiled_reconstruct.h"
@@ -15,6 +18,8 @@
 namespace gdvr {
 namespace {
 
+constexpr Term kTemporalTermsInOrder[3] = {Term::kDt, Term::kDxdt, Term::kDydt};
+
 // A small window with random targets (some off the image, some colliding),
 // random masks and random per-constraint float weights.
 struct RandomWindow {
@@ -22,7 +27,11 @@ struct RandomWindow {
   ConstraintLayout layout;
 };
 
-RandomWindow random_window(unsigned seed, int w = 9, int h = 7, int frames = 4) {
+// `scattered`: the share of pixels with a random offset in [−2, 2]²; the
+// others move with the frame's pan ((t % 3) − 1, 1 − (t % 2)), as a camera
+// pan does, so that most blocks of a line share one offset
+// (classify_target_blocks) and the operator reads them as vectors.
+RandomWindow random_window(unsigned seed, int w = 9, int h = 7, int frames = 4, double scattered = 1.0) {
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> offset(-2, 2);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
@@ -34,7 +43,12 @@ RandomWindow random_window(unsigned seed, int w = 9, int h = 7, int frames = 4) 
       for (float& v : f->buffer(term).data()) v = u(rng) - 0.5f;
     }
     f->temporal_target = Image(w, h, 2);
-    for (float& v : f->temporal_target.data()) v = float(offset(rng));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const bool random = u(rng) < scattered;
+        f->temporal_target.at(x, y, 0) = float(random ? offset(rng) : (t % 3) - 1);
+        f->temporal_target.at(x, y, 1) = float(random ? offset(rng) : 1 - (t % 2));
+      }
     std::vector<uint8_t> mask(size_t(w) * h);
     for (auto& m : mask) m = u(rng) < 0.85f;
     for (Term term : {Term::kDt, Term::kDxdt, Term::kDydt}) f->mask(term) = mask;
@@ -84,8 +98,11 @@ TEST(TemporalTargetsTest, TargetsAreOneToOneAndInsideTheImage) {
   EXPECT_GT(lands, int64_t(g.size()) / 3);
   // Collisions and targets off the image drop constraints, counted as masked.
   EXPECT_GT(r.layout.masked[term_index(Term::kDt)], 0);
-  for (size_t i = 0; i < g.size(); ++i)
-    if (r.layout.mask(Term::kDt)[i]) EXPECT_TRUE(to.lands(i));
+  for (size_t i = 0; i < g.size(); ++i) {
+    if (r.layout.mask(Term::kDt)[i]) {
+      EXPECT_TRUE(to.lands(i));
+    }
+  }
 }
 
 // Where few constraints leave their pixel, those few are dropped and the
@@ -127,10 +144,12 @@ TEST(TemporalTargetsTest, AFewMovingConstraintsAreDroppedForTheStencil) {
   for (Term term : kAllTerms) EXPECT_EQ(layout.mask(term), expected.mask(term)) << term_name(term);
 }
 
-// A, b and diag(A) of both weight modes equal Hᵀ W H etc. assembled from the definitions.
+// A, b and diag(A) of both weight modes equal Hᵀ W H etc. assembled from the
+// definitions: on scattered offsets (read one by one) and on a pan with a few
+// scattered ones (mostly read as vectors, with holes and collisions).
 TEST(TemporalTargetsTest, OperatorRhsAndDiagonalMatchTheNormalEquations) {
-  for (unsigned seed : {1u, 2u, 5u}) {
-    const RandomWindow r = random_window(seed);
+  for (unsigned seed : {1u, 2u, 5u, 6u, 7u}) {
+    const RandomWindow r = seed < 6 ? random_window(seed) : random_window(seed, 71, 9, 4, 0.05);
     const Grid& g = r.layout.grid;
     std::mt19937 rng(seed + 100);
     std::uniform_real_distribution<float> u(0.1f, 1.0f);
@@ -189,6 +208,134 @@ TEST(TemporalTargetsTest, OperatorRhsAndDiagonalMatchTheNormalEquations) {
       EXPECT_NEAR(pq, want_pq, 1e-3);
     }
   }
+}
+
+// Each block the classification lets the operator read as vectors does share
+// one offset: checked against the map pixel by pixel; on a pan most do.
+TEST(TemporalTargetsTest, ContiguousBlocksShareTheirOffsets) {
+  const RandomWindow r = random_window(8, 71, 9, 4, 0.05);
+  const Grid& g = r.layout.grid;
+  const TemporalTargets& to = r.layout.targets;
+  const TemporalTargetBlocks blocks = classify_target_blocks(g, to);
+  ASSERT_EQ(blocks.per_line, 5);  // columns 1..70 in blocks of 16
+  const int64_t W = g.width, size = int64_t(g.size());
+  int contiguous_next = 0, contiguous_source = 0, forward_blocks = 0;
+  for (int row = 0; row < g.rows(); ++row) {
+    const bool forward = row / g.height < g.frames - 1, up = row % g.height != 0;
+    for (int b = 0; b < blocks.per_line; ++b) {
+      const size_t at = size_t(row) * size_t(blocks.per_line) + size_t(b);
+      const int64_t c0 = 1 + int64_t(b) * kTargetBlock, c1 = std::min<int64_t>(W, c0 + kTargetBlock);
+      forward_blocks += forward;
+      if (!forward) {
+        EXPECT_EQ(blocks.next[at], kScatteredBlock) << "the last frame has no targets";
+      }
+      if (const int32_t o = blocks.next[at]; forward && o != kScatteredBlock) {
+        ++contiguous_next;
+        for (int64_t c = c0; c < c1; ++c) {
+          const int64_t n = int64_t(row) * W + c, j = n + int64_t(g.frame_size()) + o;
+          if (to.lands(size_t(n))) {
+            EXPECT_EQ(to.next_offset[size_t(n)], o) << "row " << row << " column " << c;
+          }
+          EXPECT_GE(j, 0);
+          EXPECT_LE(j + W, size - 1);
+        }
+      }
+      if (const int32_t d = blocks.source[at]; d != kScatteredBlock) {
+        ++contiguous_source;
+        for (int64_t c = c0; c < c1; ++c) {
+          const int64_t n = int64_t(row) * W + c;
+          for (int64_t m : {n, n - 1, up ? n - W : n}) {
+            if (to.prev_source[size_t(m)] >= 0) {
+              EXPECT_EQ(to.prev_source[size_t(m)], m - d) << "pixel " << m;
+            }
+            EXPECT_GE(m - d, 0);
+            EXPECT_LT(m - d, size);
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(contiguous_next, forward_blocks / 2);
+  EXPECT_GT(contiguous_source, g.rows() * blocks.per_line / 2);
+}
+
+// The motion-following passes of every instruction-set variant give the
+// baseline's bits, on a pan with scattered offsets, holes and collisions.
+TEST(TemporalTargetsTest, KernelVariantsGiveTheBaselineBits) {
+  const auto variants = poisson_kernel_variants();
+  const RandomWindow r = random_window(9, 83, 9, 4, 0.05);
+  const Grid& g = r.layout.grid;
+  const TemporalTargets& to = r.layout.targets;
+  const TemporalTargetBlocks blocks = classify_target_blocks(g, to);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  Field x(g.size()), weights(3 * g.size()), h(3 * g.size());
+  for (float& v : x) v = u(rng);
+  for (size_t k = 0; k < 3; ++k)
+    for (size_t i = 0; i < g.size(); ++i)
+      weights[k * g.size() + i] = r.layout.mask(kTemporalTermsInOrder[k])[i] ? 0.5f + 0.5f * u(rng) : 0.0f;
+  for (float& v : h) v = u(rng);
+  const std::vector<uint8_t> bits = pack_valid_bits(r.layout);
+  const size_t last_frame = size_t(g.frames - 1) * g.frame_size();
+  const auto run = [&](const PoissonKernels& k, bool masked, std::vector<float>* forward, std::vector<float>* out,
+                       float* dot) {
+    forward->assign(3 * g.size(), 7.0f);
+    out->assign(g.size(), 0.5f);
+    *dot = 0;
+    std::vector<float> v(size_t(g.width));
+    for (int row = 0; row < g.rows(); ++row) {
+      const int64_t begin = int64_t(row) * g.width;
+      if (size_t(begin) < last_frame) {
+        TemporalForwardLine f;
+        f.x = x.data();
+        f.begin = begin;
+        f.width = g.width;
+        f.frame_size = int64_t(g.frame_size());
+        f.last = int64_t(g.size()) - 1;
+        f.next_offset = to.next_offset.data() + begin;
+        f.block_offset = blocks.next.data() + size_t(row) * size_t(blocks.per_line);
+        f.masked = masked;
+        f.bits = bits.data() + begin;
+        for (size_t t = 0; t < 3; ++t) {
+          f.term_weight[t] = 0.25f * float(t + 1);
+          f.weight[t] = weights.data() + t * g.size() + size_t(begin);
+          f.h[t] = forward->data() + t * g.size() + size_t(begin);
+        }
+        k.temporal_forward_line(f);
+      }
+      TemporalAdjointLine a;
+      for (size_t t = 0; t < 3; ++t) a.h[t] = h.data() + t * g.size();
+      a.begin = begin;
+      a.width = g.width;
+      a.up = row % g.height != 0;
+      a.prev_source = to.prev_source.data();
+      a.block_source = blocks.source.data() + size_t(row) * size_t(blocks.per_line);
+      a.minus = masked ? 1.0f : -1.0f;
+      a.v = v.data();
+      a.out = out->data() + begin;
+      a.dot_with = x.data() + begin;
+      *dot += k.temporal_adjoint_line(a);
+    }
+  };
+  int compared = 0;
+  for (bool masked : {true, false}) {
+    std::vector<float> f_base, o_base;
+    float dot_base;
+    run(*variants.front(), masked, &f_base, &o_base, &dot_base);
+    ASSERT_TRUE(std::isfinite(dot_base));
+    ASSERT_NE(f_base[size_t(g.width) + 5], 7.0f) << "the forward pass wrote nothing";
+    for (size_t v = 1; v < variants.size(); ++v) {
+      std::vector<float> f, o;
+      float dot;
+      run(*variants[v], masked, &f, &o, &dot);
+      SCOPED_TRACE(std::string(variants[v]->isa) + (masked ? " masked" : " float weights"));
+      EXPECT_EQ(std::memcmp(&dot, &dot_base, sizeof dot), 0) << dot << " vs " << dot_base;
+      EXPECT_EQ(std::memcmp(f.data(), f_base.data(), f.size() * sizeof(float)), 0);
+      EXPECT_EQ(std::memcmp(o.data(), o_base.data(), o.size() * sizeof(float)), 0);
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 2 * int(variants.size() - 1));
 }
 
 // Zero offsets through the motion path give what the same-pixel stencil gives.
