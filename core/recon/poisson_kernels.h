@@ -50,10 +50,13 @@ struct StencilLine {
 // The motion-following temporal terms (core/recon/temporal_targets.h), one
 // line at a time: column 0 alone, then blocks of kTargetBlock columns. A block
 // whose targets (sources) sit at one offset from its pixels reads them as
-// contiguous vectors; a scattered block reads them one by one, with the same
+// contiguous vectors; a scattered block gathers them, with the same
 // arithmetic per pixel (the two may differ in the sign of a zero). Which
-// blocks are contiguous does not depend on the instruction set.
-constexpr int kTargetBlock = 16;
+// blocks are contiguous does not depend on the instruction set. Real motion
+// fields change their rounded offset every few pixels: blocks of 8 rather
+// than 16 halve the share of the textured interior's blocks whose targets
+// are scattered (40 % to 20 %) and cost the same on a uniform pan.
+constexpr int kTargetBlock = 8;
 // A block whose targets or sources do not share one offset.
 constexpr int32_t kScatteredBlock = INT32_MIN;
 // TemporalTargets::next_offset of a pixel without a target.

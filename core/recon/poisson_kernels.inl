@@ -312,6 +312,43 @@ void forward_block(const TemporalForwardLine& l, int c0, int c1, int32_t o) {
   }
 }
 
+// Columns [c0, c1) whose targets are scattered: forward_pixel's arithmetic as
+// one loop, which AVX2 and AVX-512 run with gathers.
+template <bool kMasked>
+void forward_scattered(const TemporalForwardLine& l, int c0, int c1) {
+  // 32-bit indices (the map's own type): the gathers GCC emits take those.
+  const int32_t W = l.width, n0 = int32_t(l.begin), fs = int32_t(l.frame_size), last = int32_t(l.last);
+  const float* __restrict x = l.x;
+  const int32_t* __restrict offset = l.next_offset;
+  const uint8_t* __restrict bits = l.bits;
+  const float* __restrict w0 = l.weight[0];
+  const float* __restrict w1 = l.weight[1];
+  const float* __restrict w2 = l.weight[2];
+  const float tw0 = l.term_weight[0], tw1 = l.term_weight[1], tw2 = l.term_weight[2];
+  float* __restrict h0 = l.h[0];
+  float* __restrict h1 = l.h[1];
+  float* __restrict h2 = l.h[2];
+#pragma GCC ivdep
+  for (int c = c0; c < c1; ++c) {
+    float a0, a1, a2;
+    if constexpr (kMasked) {
+      a0 = tw0 * float((bits[c] >> kBitDt) & 1);
+      a1 = tw1 * float((bits[c] >> kBitDxdt) & 1);
+      a2 = tw2 * float((bits[c] >> kBitDydt) & 1);
+    } else {
+      a0 = w0[c], a1 = w1[c], a2 = w2[c];
+    }
+    const int32_t o = offset[c];
+    const int32_t n = n0 + c;
+    const int32_t j = o != kNoTemporalTarget ? n + fs + o : n;
+    const int32_t jx = j + 1 < last ? j + 1 : last, jy = j + W < last ? j + W : last;
+    const float xi = x[n], xj = x[j];
+    h0[c] = a0 * (xj - xi);
+    h1[c] = a1 * ((x[jx] - xj) - (x[n + 1] - xi));
+    h2[c] = a2 * ((x[jy] - xj) - (x[n + W] - xi));
+  }
+}
+
 template <bool kMasked>
 void forward_line(const TemporalForwardLine& l) {
   forward_pixel<kMasked>(l, 0);
@@ -325,7 +362,7 @@ void forward_line(const TemporalForwardLine& l) {
     if (o != kScatteredBlock)
       forward_block<kMasked>(l, c0, c1, o);
     else
-      for (int c = c0; c < c1; ++c) forward_pixel<kMasked>(l, c);
+      forward_scattered<kMasked>(l, c0, c1);
     b = end;
     c0 = c1;
   }
@@ -382,6 +419,38 @@ void adjoint_block(const TemporalAdjointLine& l, int c0, int c1, int32_t d, floa
   }
 }
 
+// Columns [c0, c1), c0 ≥ 1, whose sources are scattered: adjoint_block's
+// arithmetic with each source read where it lies (a missing one reads pixel
+// 0, times 0), as one loop that AVX2 and AVX-512 run with gathers.
+template <bool kUp>
+void adjoint_scattered(const TemporalAdjointLine& l, int c0, int c1, float* __restrict v) {
+  const int32_t W = l.width, n0 = int32_t(l.begin);
+  const float* __restrict h0 = l.h[0];
+  const float* __restrict h1 = l.h[1];
+  const float* __restrict h2 = l.h[2];
+  const int32_t* __restrict prev = l.prev_source;
+  const float m = l.minus;
+#pragma GCC ivdep
+  for (int c = c0; c < c1; ++c) {
+    const int32_t n = n0 + c;
+    const float above = kUp ? h2[n - W] : 0.0f;
+    const float s = m * h0[n] + h1[n] + h2[n] + m * (h1[n - 1] + above);
+    const int32_t k = prev[n], kl = prev[n - 1];
+    // k for a source, else 0 (prev_source is −1 there), without a select that
+    // GCC would turn into a masked gather it cannot emulate.
+    const int32_t ks = k & ~(k >> 31), kls = kl & ~(kl >> 31);
+    const float has = float(k >= 0), has_left = float(kl >= 0);
+    const float s0 = has * h0[ks], s1 = has * h1[ks], s2 = has * h2[ks];
+    const float sl = has_left * h1[kls];
+    float sa = 0.0f;
+    if constexpr (kUp) {
+      const int32_t ku = prev[n - W];
+      sa = float(ku >= 0) * h2[ku & ~(ku >> 31)];
+    }
+    v[c] = s + (s0 + m * (s1 + s2) + sl + sa);
+  }
+}
+
 float temporal_adjoint_line(const TemporalAdjointLine& l) {
   const int W = l.width;
   float* v = l.v;
@@ -391,8 +460,10 @@ float temporal_adjoint_line(const TemporalAdjointLine& l) {
     int end = b + 1;
     while (d != kScatteredBlock && 1 + end * kTargetBlock < W && l.block_source[end] == d) ++end;
     const int c1 = min_int(W, 1 + end * kTargetBlock);
-    if (d == kScatteredBlock)
-      for (int c = c0; c < c1; ++c) v[c] = adjoint_pixel(l, c);
+    if (d == kScatteredBlock && l.up)
+      adjoint_scattered<true>(l, c0, c1, v);
+    else if (d == kScatteredBlock)
+      adjoint_scattered<false>(l, c0, c1, v);
     else if (l.up)
       adjoint_block<true>(l, c0, c1, d, v);
     else

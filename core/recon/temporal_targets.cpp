@@ -7,6 +7,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <climits>
 #include <functional>
 
 namespace gdvr {
@@ -21,7 +22,9 @@ TemporalTargets build_temporal_targets(const GradientWindow& window) {
         moves = true;
         break;
       }
-  if (!moves) return {};
+  // The map and the kernels index the grid with 32 bits; a window that large
+  // (beyond any tile the tiled solve makes) keeps same-pixel constraints.
+  if (!moves || g.size() > size_t(INT32_MAX)) return {};
   TemporalTargets out;
   // One pass over the window's sources; with `only_same_pixel` a source whose
   // offset is not zero gets no target (and takes none from another source).

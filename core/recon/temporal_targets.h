@@ -56,7 +56,8 @@ constexpr double kMinMovingShare = 0.1;
 // The window's map, from each frame's GradientFrame::temporal_target (frames
 // without one link the same pixel; pixels whose temporal terms are all masked
 // link nothing); empty when every offset of frames
-// 0..W−2 is zero, so windows without motion keep the stencil, and
+// 0..W−2 is zero, so windows without motion keep the stencil (and for a grid
+// of more than 2³¹ pixels, which 32-bit indices cannot address), and
 // all_same_pixel (with the moving constraints left without a target) when
 // fewer than kMinMovingShare of them move.
 TemporalTargets build_temporal_targets(const GradientWindow& window);
@@ -71,9 +72,10 @@ inline int temporal_slot(Term t) { return term_index(t) - term_index(Term::kDt);
 // (`next`), and the d with prev_source[m] = m − d for every pixel m of the
 // block, its left neighbour and (below a frame's first line) its upper
 // neighbour that has a source (`source`); kScatteredBlock where they differ or
-// a contiguous read would leave the grid. On a pan most blocks share one
-// offset, and the operator's passes read them as vectors (3.2x faster than
-// one pixel at a time; docs/benchmarks.md).
+// a contiguous read would leave the grid. Contiguous blocks are read as
+// vectors, scattered ones gathered (docs/benchmarks.md: the motion-following
+// solve costs 1.44x (L2) and 1.14x (L1) the same-pixel stencil's on a 2-px
+// pan, against 1.9x and 1.53x one pixel at a time).
 struct TemporalTargetBlocks {
   int per_line = 0;
   std::vector<int32_t> next, source;  // index: line · per_line + block

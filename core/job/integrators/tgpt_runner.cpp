@@ -6,7 +6,6 @@
 
 #include "core/job/integrators/gradient_domain_frame.h"
 #include "core/recon/reconstruct.h"
-#include "core/recon/temporal_targets.h"
 #include "core/render/feature_buffers.h"
 #include "core/temporal/change_detection.h"
 #include "core/temporal/pass_schedule.h"
@@ -139,33 +138,6 @@ namespace {
 // its last frame, so what this over- or underestimates is not paid back: in
 // those runs at most 0.010 s per frame, 3 % of a 0.3 s budget.
 constexpr double kWindowOverCalibrationCost = 1.5;
-// Where the temporal constraints follow whole-pixel motion, the window solve
-// runs the gather passes of core/recon/temporal_targets.h next to the
-// stencil. Timed in the calibration itself they read about 2x the real
-// windows' cost (one run of the four animations: tgpt-l1-sampled then spent
-// 0.75 of a 0.3 s budget): the two-frame window does not show it, so the
-// calibration stays the stencil's and is scaled by the stage-2 time of
-// motion-following over same-pixel constraints, measured on the same four
-// animations and budgets, one run each: 1.03–1.62, median 1.2.
-constexpr double kMotionFollowingSolveCost = 1.2;
-
-// Whether the window solve will follow the motion (core/recon/temporal_targets.h):
-// whether at least kMinMovingShare of the pixels whose surface has a motion
-// vector (the forward field, layer "motion") move by half a pixel or more.
-bool solve_follows_motion(const LayeredImage& layers) {
-  const ImageLayer* motion = layers.find("motion");
-  if (!motion || motion->image.channels() != 3) return false;
-  const Image& m = motion->image;
-  size_t valid = 0, moving = 0;
-  for (int y = 0; y < m.height(); ++y)
-    for (int x = 0; x < m.width(); ++x) {
-      if (m.at(x, y, 2) == 0.0f) continue;
-      ++valid;
-      moving += motion_pixel_offset(m.at(x, y, 0)) != 0 || motion_pixel_offset(m.at(x, y, 1)) != 0;
-    }
-  return valid > 0 && double(moving) >= kMinMovingShare * double(valid);
-}
-
 // Before anything is measured (the first frame's plan only): seconds per
 // pixel and window frame of stage 2, same measurement, two cores.
 double prior_seconds_per_pixel_frame(ReconMethod method) {
@@ -231,8 +203,7 @@ void TgptRunner::calibrate_stage2(const LayeredImage& layers, FrameTimeBudget* b
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   budget->record_one_off(seconds);
   if (!solved.ok()) return;
-  const double motion = settings_.compensates_motion() && solve_follows_motion(layers) ? kMotionFollowingSolveCost : 1.0;
-  budget->set_stage2_prior(seconds / 2 * kWindowOverCalibrationCost * motion * window_frames_per_frame());
+  budget->set_stage2_prior(seconds / 2 * kWindowOverCalibrationCost * window_frames_per_frame());
 }
 
 Expected<FrameOutput> TgptRunner::finalize(int frame, const std::map<int, FrameBuffers>& buffers) {

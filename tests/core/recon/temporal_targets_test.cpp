@@ -217,7 +217,7 @@ TEST(TemporalTargetsTest, ContiguousBlocksShareTheirOffsets) {
   const Grid& g = r.layout.grid;
   const TemporalTargets& to = r.layout.targets;
   const TemporalTargetBlocks blocks = classify_target_blocks(g, to);
-  ASSERT_EQ(blocks.per_line, 5);  // columns 1..70 in blocks of 16
+  ASSERT_EQ(blocks.per_line, (70 + kTargetBlock - 1) / kTargetBlock);  // columns 1..70
   const int64_t W = g.width, size = int64_t(g.size());
   int contiguous_next = 0, contiguous_source = 0, forward_blocks = 0;
   for (int row = 0; row < g.rows(); ++row) {
