@@ -35,8 +35,9 @@ int usage(const char* msg) {
       "       [--budgets 0.5,1,2,4] [--frames A-B] [--reference-spp N] [--methods pt,gpt-l2,...]\n"
       "       [--threads N] [--width W] [--height H] [--seed N] [--param NAME=VALUE ...]\n"
       "methods: pt pt-sd pt-oidn pt-sd-oidn gpt-l1 gpt-l2 gpt-weighted tgpt-l1 tgpt-l2 tgpt-l1-sampled\n"
-      "         (default: all that apply but tgpt-l1-sampled; pt-oidn and pt-sd-oidn need a build with Intel\n"
-      "         Open Image Denoise; the tgpt methods use it for their data term where the build has it)\n");
+      "         tgpt-l1-oidn (default: all that apply but tgpt-l1-sampled and tgpt-l1-oidn; the -oidn\n"
+      "         methods need a build with Intel Open Image Denoise; the tgpt methods use it for their\n"
+      "         data term where the build has it)\n");
 }
 
 using gdvr::tools::parse_int;

@@ -30,11 +30,12 @@ struct ErrorTimeReportOptions {
   int reference_spp = 1024;
   std::vector<double> budgets = {0.5, 1, 2, 4};  // seconds per frame
   // Methods to run, from pt, pt-sd, pt-oidn, pt-sd-oidn, gpt-l1, gpt-l2,
-  // gpt-weighted, tgpt-l1, tgpt-l2, tgpt-l1-sampled; empty: all that apply
-  // but tgpt-l1-sampled (tgpt only for animations of 2+ frames, the -oidn
-  // ones only in a build with OIDN, which fails with a message saying so
-  // when one of them is asked for). The tgpt methods have the job default's
-  // data term (denoised in a build with OIDN); tgpt-l1-sampled the sampled one.
+  // gpt-weighted, tgpt-l1, tgpt-l2, tgpt-l1-sampled, tgpt-l1-oidn; empty: all
+  // that apply but the last two (tgpt only for animations of 2+ frames, the
+  // -oidn ones only in a build with OIDN, which fails with a message saying
+  // so when one of them is asked for). The tgpt methods have the job
+  // default's data term (denoised in a build with OIDN); tgpt-l1-sampled the
+  // sampled one; tgpt-l1-oidn is tgpt-l1 denoised again afterwards.
   std::vector<std::string> methods;
   std::string ocio_config;  // display transform of the images; empty: a plain sRGB encoding
 };

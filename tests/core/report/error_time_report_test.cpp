@@ -208,6 +208,33 @@ TEST(ErrorTimeReportTest, DenoisedBaselinesCountFeaturesAndDenoisingInTheirTime)
   fs::remove_all(out);
 }
 
+// tgpt-l1-oidn denoises tgpt-l1's reconstructed frames again, its time
+// counted like the baselines'; it is asked for, never a default run.
+TEST(ErrorTimeReportTest, TgptFollowedByOidnCountsItsDenoising) {
+  const fs::path out = fresh_dir("tgpt_oidn");
+  ErrorTimeReportOptions o = tiny_demo_report(out);
+  o.job.frames = "0-1";
+  o.job.width = o.job.height = 32;
+  o.budgets = {0.15};
+  o.methods = {"tgpt-l1", "tgpt-l1-oidn"};
+  auto report = run_error_time_report(o, nullptr, nullptr);
+  ASSERT_TRUE(report.ok()) << report.status().to_string();
+  ASSERT_EQ(report->rows.size(), 2u);
+  const ReportRow& plain = report->rows[0];
+  const ReportRow& denoised = report->rows[1];
+  EXPECT_EQ(denoised.method, "tgpt-l1-oidn");
+  EXPECT_EQ(denoised.integrator, "tgpt");
+  EXPECT_EQ(plain.denoise_seconds, 0.0);
+  EXPECT_GT(denoised.denoise_seconds, 0.0);
+  EXPECT_NEAR(denoised.seconds_per_frame,
+              denoised.stage1_seconds + denoised.reconstruct_seconds + denoised.denoise_seconds, 1e-9);
+  EXPECT_EQ(denoised.non_finite, 0.0);
+  EXPECT_GT(denoised.rel_mse_global, 0.0);
+  EXPECT_LT(denoised.rel_mse_global, 0.5);
+  EXPECT_TRUE(fs::exists(out / "images/tgpt-l1-oidn_0p15s.png"));
+  fs::remove_all(out);
+}
+
 #else
 
 TEST(ErrorTimeReportTest, DenoisedBaselinesNeedABuildWithOidn) {
