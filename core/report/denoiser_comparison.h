@@ -25,6 +25,9 @@ struct DenoiserTargets {
   double time_tolerance = 0.05;
   // "Well below": the reference's floor at most this fraction of every figure compared.
   double floor_fraction = 0.1;
+  // The floor-removed ratios are given where the floor is at most this
+  // fraction of the baseline's figure (above it they are mostly noise).
+  double removable_floor_fraction = 0.5;
 };
 
 struct DenoiserComparison {
@@ -36,6 +39,12 @@ struct DenoiserComparison {
   bool meets_per_pixel = false, meets_flicker = false, meets_global = false;
   bool equal_time = false;        // seconds_ratio within 1 ± time_tolerance
   bool floor_well_below = false;  // the reference floor ≤ floor_fraction of each compared figure (unknown: false)
+  // An estimate for rows whose reference is too noisy to judge: the floor is
+  // what the reference's own noise adds to every figure (in expectation, as
+  // it is independent of the method's error), so it is taken off both:
+  // max(method − floor, 0) / (baseline − floor). Unknown where the floor is
+  // unknown or above removable_floor_fraction of the baseline's figure.
+  double floor_removed_per_pixel = kNoValue, floor_removed_flicker = kNoValue, floor_removed_global = kNoValue;
   bool meets_all() const {
     return meets_per_pixel && meets_flicker && meets_global && equal_time && floor_well_below;
   }

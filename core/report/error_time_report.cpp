@@ -622,7 +622,7 @@ std::string html_report(const ErrorTimeReportOptions& o, const ReportMeta& meta,
       << cell(meta.reference_floor.per_pixel) << ", flicker " << cell(meta.reference_floor.flicker) << ", global "
       << cell(meta.reference_floor.global) << ").</p>\n<table><tr><th>method</th><th>budget s</th><th>best per-pixel "
          "baseline</th><th>time</th><th>per-pixel</th><th>flicker</th><th>global</th><th>reference floor</th>"
-         "<th>verdict</th></tr>\n";
+         "<th>verdict</th><th>floor removed: per-pixel / flicker / global</th></tr>\n";
     auto mark = [&](double v, bool ok) { return cell(v, "%.2f") + (ok ? " &#10003;" : " &#10007;"); };
     for (const DenoiserComparison& c : vs_denoiser)
       h << "<tr><td class=l>" << html_escape(c.method) << "</td><td>" << cell(c.budget_s, "%g") << "</td><td class=l>"
@@ -630,7 +630,8 @@ std::string html_report(const ErrorTimeReportOptions& o, const ReportMeta& meta,
         << mark(c.ratio_per_pixel, c.meets_per_pixel) << "</td><td>" << mark(c.ratio_flicker, c.meets_flicker)
         << "</td><td>" << mark(c.ratio_global, c.meets_global) << "</td><td class=l>"
         << (c.floor_well_below ? "well below" : "too close") << "</td><td class=l>"
-        << (c.meets_all() ? "meets" : "misses") << "</td></tr>\n";
+        << (c.meets_all() ? "meets" : "misses") << "</td><td>" << cell(c.floor_removed_per_pixel, "%.2f") << " / "
+        << cell(c.floor_removed_flicker, "%.2f") << " / " << cell(c.floor_removed_global, "%.2f") << "</td></tr>\n";
     h << "</table>\n";
   }
   // ---- Predicted vs achieved ----

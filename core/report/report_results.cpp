@@ -140,6 +140,9 @@ std::string results_json(const ReportMeta& meta, const std::vector<ReportRow>& r
                          {"meets_global", c.meets_global},
                          {"equal_time", c.equal_time},
                          {"floor_well_below", c.floor_well_below},
+                         {"floor_removed_per_pixel", json_number(c.floor_removed_per_pixel)},
+                         {"floor_removed_flicker", json_number(c.floor_removed_flicker)},
+                         {"floor_removed_global", json_number(c.floor_removed_global)},
                          {"meets_all", c.meets_all()}};
     j["denoiser_comparison"].push_back(std::move(cj));
   }

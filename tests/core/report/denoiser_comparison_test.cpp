@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace gdvr {
 namespace {
 
@@ -71,6 +73,30 @@ TEST(DenoiserComparisonTest, EachConditionCanFailOnItsOwn) {
   EXPECT_FALSE(noisy_ref.meets_all());
   // Unknown floor: no verdict either.
   EXPECT_FALSE(verdict(good, ReferenceNoiseFloor{}).floor_well_below);
+}
+
+// A reference too noisy to judge still gives an estimate: its floor, which
+// adds to every figure, taken off both; none where it is most of the
+// baseline's figure.
+TEST(DenoiserComparisonTest, TheFloorRemovedRatiosTakeTheReferenceNoiseOffBothFigures) {
+  const std::vector<ReportRow> rows = {row("pt-sd-oidn", "pt", 1, 1.0, 6e-4, 1e-4, 2e-3),
+                                       row("tgpt-l1", "tgpt", 1, 1.0, 9e-4, 2e-5, 2.1e-3)};
+  const ReferenceNoiseFloor floor{1.9e-3, 2.4e-4, 1e-5};  // global, per-pixel, flicker
+  auto c = compare_with_denoisers(rows, floor);
+  ASSERT_EQ(c.size(), 1u);
+  EXPECT_FALSE(c[0].floor_well_below);
+  EXPECT_FALSE(c[0].meets_all());
+  EXPECT_NEAR(c[0].ratio_per_pixel, 1.5, 1e-9);
+  EXPECT_NEAR(c[0].floor_removed_per_pixel, (9e-4 - 2.4e-4) / (6e-4 - 2.4e-4), 1e-9);  // 1.83
+  EXPECT_NEAR(c[0].floor_removed_flicker, (2e-5 - 1e-5) / (1e-4 - 1e-5), 1e-9);
+  EXPECT_FALSE(std::isfinite(c[0].floor_removed_global)) << "the floor is 95 % of the baseline's global figure";
+  // A method at the floor: nothing of its own error is left to see.
+  const std::vector<ReportRow> at_floor = {rows[0], row("tgpt-l1", "tgpt", 1, 1.0, 2e-4, 2e-5, 2.1e-3)};
+  EXPECT_EQ(compare_with_denoisers(at_floor, floor)[0].floor_removed_per_pixel, 0.0);
+  // Unknown floor: no estimate.
+  EXPECT_FALSE(std::isfinite(compare_with_denoisers(rows, ReferenceNoiseFloor{})[0].floor_removed_per_pixel));
+  const std::string md = denoiser_comparison_markdown(c, floor);
+  EXPECT_NE(md.find("| 1.83 / 0.11 / – |"), std::string::npos) << md;
 }
 
 TEST(DenoiserComparisonTest, NothingToCompareWithoutADenoisedBaselineAtThatBudget) {
