@@ -169,17 +169,24 @@ TEST(ErrorTimeReportTest, StillSceneRunsNoTgptAndHasNoFlicker) {
 
 #ifdef GDVR_HAVE_OIDN
 
+// A 32×32 report at one budget of 0.15 s with the given frames and methods.
+ErrorTimeReportOptions small_denoised_report(const fs::path& out, const std::string& frames,
+                                             std::vector<std::string> methods) {
+  ErrorTimeReportOptions o = tiny_demo_report(out);
+  o.job.frames = frames;
+  o.job.width = o.job.height = 32;
+  o.budgets = {0.15};
+  o.methods = std::move(methods);
+  return o;
+}
+
 // PT + OIDN guided by albedo and normal at equal time: the feature pass and
 // the denoiser come out of the budget, and both count in the row's time, as
 // stage 1 and stage 2 do for every method.
 TEST(ErrorTimeReportTest, DenoisedBaselinesCountFeaturesAndDenoisingInTheirTime) {
   const fs::path out = fresh_dir("oidn");
-  ErrorTimeReportOptions o = tiny_demo_report(out);
-  o.job.frames = "1";
-  o.job.width = o.job.height = 32;
-  o.budgets = {0.15};
-  o.methods = {"pt", "pt-oidn", "pt-sd-oidn"};
-  auto report = run_error_time_report(o, nullptr, nullptr);
+  auto report = run_error_time_report(small_denoised_report(out, "1", {"pt", "pt-oidn", "pt-sd-oidn"}), nullptr,
+                                      nullptr);
   ASSERT_TRUE(report.ok()) << report.status().to_string();
   ASSERT_EQ(report->rows.size(), 3u);
   const ReportRow& pt = report->rows[0];
@@ -212,12 +219,8 @@ TEST(ErrorTimeReportTest, DenoisedBaselinesCountFeaturesAndDenoisingInTheirTime)
 // counted like the baselines'; it is asked for, never a default run.
 TEST(ErrorTimeReportTest, TgptFollowedByOidnCountsItsDenoising) {
   const fs::path out = fresh_dir("tgpt_oidn");
-  ErrorTimeReportOptions o = tiny_demo_report(out);
-  o.job.frames = "0-1";
-  o.job.width = o.job.height = 32;
-  o.budgets = {0.15};
-  o.methods = {"tgpt-l1", "tgpt-l1-oidn"};
-  auto report = run_error_time_report(o, nullptr, nullptr);
+  auto report =
+      run_error_time_report(small_denoised_report(out, "0-1", {"tgpt-l1", "tgpt-l1-oidn"}), nullptr, nullptr);
   ASSERT_TRUE(report.ok()) << report.status().to_string();
   ASSERT_EQ(report->rows.size(), 2u);
   const ReportRow& plain = report->rows[0];
