@@ -144,69 +144,81 @@ TEST(TemporalTargetsTest, AFewMovingConstraintsAreDroppedForTheStencil) {
   for (Term term : kAllTerms) EXPECT_EQ(layout.mask(term), expected.mask(term)) << term_name(term);
 }
 
-// A, b and diag(A) of both weight modes equal Hᵀ W H etc. assembled from the
-// definitions: on scattered offsets (read one by one) and on a pan with a few
-// scattered ones (mostly read as vectors, with holes and collisions).
-TEST(TemporalTargetsTest, OperatorRhsAndDiagonalMatchTheNormalEquations) {
-  for (unsigned seed : {1u, 2u, 5u, 6u, 7u}) {
-    const RandomWindow r = seed < 6 ? random_window(seed) : random_window(seed, 71, 9, 4, 0.05);
-    const Grid& g = r.layout.grid;
-    std::mt19937 rng(seed + 100);
-    std::uniform_real_distribution<float> u(0.1f, 1.0f);
-    // Float mode: random positive weights on valid constraints.
-    PoissonSystem float_mode(g, true);
-    float_mode.follow_temporal_targets(&r.layout.targets);
-    for (Term term : kAllTerms)
-      for (size_t i = 0; i < g.size(); ++i) float_mode.weights(term)[i] = r.layout.mask(term)[i] ? u(rng) : 0.0f;
-    // Mask mode: constant weights per term.
-    const std::array<float, kTermCount> term_w = {0.04f, 1.0f, 0.8f, 0.6f, 0.5f, 0.3f};
-    PoissonSystem mask_mode(g, true, term_w, 0.001f, pack_valid_bits(r.layout));
-    mask_mode.follow_temporal_targets(&r.layout.targets);
+// A, b and diag(A) of both weight modes of r's system equal Hᵀ W H etc.
+// assembled from the definitions.
+void expect_normal_equations(const RandomWindow& r, unsigned seed) {
+  ASSERT_FALSE(r.layout.targets.empty()) << "the window must follow motion for this check";
+  const Grid& g = r.layout.grid;
+  std::mt19937 rng(seed + 100);
+  std::uniform_real_distribution<float> u(0.1f, 1.0f);
+  // Float mode: random positive weights on valid constraints.
+  PoissonSystem float_mode(g, true);
+  float_mode.follow_temporal_targets(&r.layout.targets);
+  for (Term term : kAllTerms)
+    for (size_t i = 0; i < g.size(); ++i) float_mode.weights(term)[i] = r.layout.mask(term)[i] ? u(rng) : 0.0f;
+  // Mask mode: constant weights per term.
+  const std::array<float, kTermCount> term_w = {0.04f, 1.0f, 0.8f, 0.6f, 0.5f, 0.3f};
+  PoissonSystem mask_mode(g, true, term_w, 0.001f, pack_valid_bits(r.layout));
+  mask_mode.follow_temporal_targets(&r.layout.targets);
 
-    std::vector<float> p(g.size());
-    for (float& v : p) v = u(rng) - 0.5f;
-    std::array<Field, kTermCount> d;
-    std::array<const Field*, kTermCount> targets{};
-    for (Term term : kAllTerms) {
-      d[term_index(term)] = gather_term(r.window, r.layout, term, 0);
-      targets[term_index(term)] = &d[term_index(term)];
-    }
-    for (const PoissonSystem* A : {&float_mode, &mask_mode}) {
-      const bool masked = A == &mask_mode;
-      const auto weight = [&](Term term, size_t i) -> double {
-        const bool valid = r.layout.mask(term)[i] != 0;
-        if (!masked) return A->weights(term)[i];
-        if (term == Term::kPrimal) return valid ? term_w[0] : 0.001;
-        return valid ? term_w[size_t(term_index(term))] : 0.0;
-      };
-      std::vector<double> Ap(g.size(), 0.0), b(g.size(), 0.0), diag(g.size(), 0.0);
-      for (Term term : kAllTerms)
-        for (size_t i = 0; i < g.size(); ++i) {
-          const double w = weight(term, i);
-          if (w == 0.0 || (term != Term::kPrimal && !r.layout.mask(term)[i])) continue;
-          const auto row = constraint_row(g, r.layout.targets, term, i);
-          double h = 0;
-          for (auto [k, c] : row) h += c * p[k];
-          const double target = term == Term::kPrimal && !r.layout.mask(term)[i] ? 0.0 : d[term_index(term)][i];
-          for (auto [k, c] : row) {
-            Ap[k] += w * c * h;
-            b[k] += w * c * target;
-            diag[k] += w * c * c;
-          }
-        }
-      Field q(g.size()), got_b, got_diag;
-      const double pq = A->apply(p.data(), q.data());
-      A->rhs(targets, &got_b);
-      A->diagonal(&got_diag);
-      double want_pq = 0;
+  std::vector<float> p(g.size());
+  for (float& v : p) v = u(rng) - 0.5f;
+  std::array<Field, kTermCount> d;
+  std::array<const Field*, kTermCount> targets{};
+  for (Term term : kAllTerms) {
+    d[term_index(term)] = gather_term(r.window, r.layout, term, 0);
+    targets[term_index(term)] = &d[term_index(term)];
+  }
+  for (const PoissonSystem* A : {&float_mode, &mask_mode}) {
+    const bool masked = A == &mask_mode;
+    const auto weight = [&](Term term, size_t i) -> double {
+      const bool valid = r.layout.mask(term)[i] != 0;
+      if (!masked) return A->weights(term)[i];
+      if (term == Term::kPrimal) return valid ? term_w[0] : 0.001;
+      return valid ? term_w[size_t(term_index(term))] : 0.0;
+    };
+    std::vector<double> Ap(g.size(), 0.0), b(g.size(), 0.0), diag(g.size(), 0.0);
+    for (Term term : kAllTerms)
       for (size_t i = 0; i < g.size(); ++i) {
-        EXPECT_NEAR(q[i], Ap[i], 1e-4) << "A p at " << i << (masked ? " (mask mode)" : " (float mode)");
-        EXPECT_NEAR(got_b[i], b[i], 1e-4) << "b at " << i;
-        EXPECT_NEAR(got_diag[i], diag[i], 1e-4) << "diag at " << i;
-        want_pq += p[i] * Ap[i];
+        const double w = weight(term, i);
+        if (w == 0.0 || (term != Term::kPrimal && !r.layout.mask(term)[i])) continue;
+        const auto row = constraint_row(g, r.layout.targets, term, i);
+        double h = 0;
+        for (auto [k, c] : row) h += c * p[k];
+        const double target = term == Term::kPrimal && !r.layout.mask(term)[i] ? 0.0 : d[term_index(term)][i];
+        for (auto [k, c] : row) {
+          Ap[k] += w * c * h;
+          b[k] += w * c * target;
+          diag[k] += w * c * c;
+        }
       }
-      EXPECT_NEAR(pq, want_pq, 1e-3);
+    Field q(g.size()), got_b, got_diag;
+    const double pq = A->apply(p.data(), q.data());
+    A->rhs(targets, &got_b);
+    A->diagonal(&got_diag);
+    double want_pq = 0;
+    for (size_t i = 0; i < g.size(); ++i) {
+      EXPECT_NEAR(q[i], Ap[i], 1e-4) << "A p at " << i << (masked ? " (mask mode)" : " (float mode)");
+      EXPECT_NEAR(got_b[i], b[i], 1e-4) << "b at " << i;
+      EXPECT_NEAR(got_diag[i], diag[i], 1e-4) << "diag at " << i;
+      want_pq += p[i] * Ap[i];
     }
+    EXPECT_NEAR(pq, want_pq, 1e-3);
+  }
+}
+
+// On scattered offsets (read one by one), on a pan with a few scattered ones
+// (mostly read as vectors, with holes and collisions), and on windows one or
+// two pixels wide or high (blocks shorter than a vector, or none).
+TEST(TemporalTargetsTest, OperatorRhsAndDiagonalMatchTheNormalEquations) {
+  for (unsigned seed : {1u, 2u, 5u}) expect_normal_equations(random_window(seed), seed);
+  for (unsigned seed : {6u, 7u}) expect_normal_equations(random_window(seed, 71, 9, 4, 0.05), seed);
+  const int shapes[][2] = {{1, 6}, {2, 5}, {6, 1}, {10, 2}, {19, 3}};
+  unsigned seed = 20;
+  for (const auto& wh : shapes) {
+    SCOPED_TRACE(std::to_string(wh[0]) + "x" + std::to_string(wh[1]));
+    ++seed;
+    expect_normal_equations(random_window(seed, wh[0], wh[1], 3, 0.5), seed);
   }
 }
 
