@@ -13,13 +13,29 @@ GradientTracer::GradientTracer(const FrameScene& scene, const PerspectiveCamera&
                                const PathTracerSettings& path, const GptSettings& settings, uint64_t seed,
                                uint32_t frame)
     : scene_(scene), camera_(camera), width_(width), height_(height), path_(path), settings_(settings),
-      seed_(seed), frame_(frame), camera_hits_(scene, camera) {
+      seed_(seed), frame_(frame), camera_hits_(scene, camera), tile_rays_(scene, camera) {
   base_.v.reserve(64);
+}
+
+Vec2f GradientTracer::own_jitter(int x, int y, Sampler* sampler) const {
+  // Whose stream this sample replays (the pixel's own without a replay map).
+  const ReplaySource* source = replay_ ? &replay_->at(x, y) : nullptr;
+  *sampler = Sampler(seed_, frame_, source ? source->x : uint32_t(x), source ? source->y : uint32_t(y), s_);
+  const Vec2f own = sampler->next_2d();
+  return source ? rotate_jitter(own, source->shift) : own;
 }
 
 void GradientTracer::begin_sample(const Tile& tile, uint32_t s) {
   s_ = s;
-  if (!settings_.shared_jitter) return;
+  if (!settings_.shared_jitter) {
+    // The offsets' rays only where every offset is made and starts from its
+    // first hit (the replay shift traces its own path from the ray).
+    tile_offsets_ = !settings_.cached_rr && settings_.shift != ShiftMapping::kReplay;
+    Sampler sampler;
+    tile_rays_.begin(tile, width_, height_, [&](int x, int y) { return own_jitter(x, y, &sampler); }, tile_offsets_,
+                     counters_);
+    return;
+  }
   // A pixel no image has (coordinates are bounded far below 2^32 - 1) keys the
   // shared position, so it is independent of every pixel's own stream.
   Sampler shared(seed_, frame_, ~0u, ~0u, s);
@@ -29,21 +45,15 @@ void GradientTracer::begin_sample(const Tile& tile, uint32_t s) {
 
 void GradientTracer::sample(int x, int y, GradientSample* out) {
   *out = GradientSample();
-  // Whose stream this sample replays (the pixel's own without a replay map).
-  const ReplaySource* source = replay_ ? &replay_->at(x, y) : nullptr;
-  Sampler sampler(seed_, frame_, source ? source->x : uint32_t(x), source ? source->y : uint32_t(y), s_);
   // Box filter, as render_frame_pt. The pixel's own position is drawn even
   // when the shared one is used, so the rest of its stream stays PT's.
-  const Vec2f own_jitter = sampler.next_2d();
+  Sampler sampler;
+  const Vec2f own = own_jitter(x, y, &sampler);
   const bool shared = settings_.shared_jitter;
-  const Vec2f jitter = shared ? shared_jitter_ : source ? rotate_jitter(own_jitter, source->shift) : own_jitter;
+  const Vec2f jitter = shared ? shared_jitter_ : own;
   const Sampler after_camera = sampler;
-  if (shared) {
-    trace_base_path(scene_, path_, camera_hits_.at(x, y, counters_), sampler, counters_, &base_);
-  } else {
-    trace_base_path(scene_, path_, camera_.generate_ray({float(x) + jitter.x, float(y) + jitter.y}), sampler,
-                    counters_, &base_);
-  }
+  trace_base_path(scene_, path_, shared ? camera_hits_.at(x, y, counters_) : tile_rays_.base(x, y), sampler, counters_,
+                  &base_);
   if (base_.invalid) return;
   out->primal = base_.indirect;
   out->direct = base_.direct;
@@ -88,6 +98,8 @@ void GradientTracer::sample(int x, int y, GradientSample* out) {
       r = replay_shift(scene_, path_, base_, offset_ray(), after_camera, counters_);
     } else if (shared) {
       r = shift_from_cache(scene_, settings_, base_, camera_hits_.at(nx, ny, counters_), replay_prefix, counters_);
+    } else if (tile_offsets_) {
+      r = shift_from_cache(scene_, settings_, base_, tile_rays_.offset(x, y, o), replay_prefix, counters_);
     } else {
       r = shift_from_cache(scene_, settings_, base_, offset_ray(), replay_prefix, counters_);
     }

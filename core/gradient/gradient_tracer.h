@@ -9,6 +9,7 @@
 #include "core/gradient/gradient_film.h"
 #include "core/gradient/path_record.h"
 #include "core/gradient/temporal_reconnection_shift.h"
+#include "core/gradient/tile_camera_rays.h"
 #include "core/render/path_tracer.h"
 #include "core/render/perspective_camera.h"
 
@@ -24,7 +25,10 @@ class GradientTracer {
   // Starts sample index s of the pixels of `tile`; sample() then takes them
   // in any order. With GptSettings::shared_jitter the first hits of the tile's
   // camera rays (and of the ring around it) are traced once and shared by
-  // base paths and offsets (CameraHitCache).
+  // base paths and offsets (CameraHitCache); without it every pixel's own
+  // base ray, and where every offset is made (no cached-path roulette, a
+  // shift that starts from the first hit) the offsets' rays too, are traced
+  // up front in streams (TileCameraRays).
   void begin_sample(const Tile& tile, uint32_t s);
   // One sample of pixel (x, y) of the current tile with the current sample
   // index: the base estimate, the four MIS-weighted gradient generations
@@ -57,6 +61,11 @@ class GradientTracer {
   uint32_t s_ = 0;       // the current sample index
   Vec2f shared_jitter_;  // its sub-pixel position when shared
   CameraHitCache camera_hits_;
+  TileCameraRays tile_rays_;
+  bool tile_offsets_ = false;  // tile_rays_ holds the offsets' rays
+  // Pixel (x, y)'s own sub-pixel position for the current sample index, and
+  // its sampler just after drawing it (the rest of the stream is its paths').
+  Vec2f own_jitter(int x, int y, Sampler* sampler) const;
   const TemporalShiftTarget* temporal_ = nullptr;
   uint64_t temporal_rays_ = 0;
   const ReplayMap* replay_ = nullptr;
