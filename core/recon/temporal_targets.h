@@ -46,11 +46,13 @@ struct TemporalTargets {
 
 struct GradientWindow;
 // Below this share of a window's temporal constraints leaving their pixel,
-// the few that do are dropped rather than paying the gather passes for
-// every pixel (1.5-2.2x the stencil's solve time, docs/benchmarks.md): their
-// pixels keep their spatial terms, the rest the vectorised stencil. Shares
-// measured on the four animations of docs/benchmarks.md: 4 % on the demo
-// (a box moving under a slow camera), 31 % stiff, 81 % textured, 98 % indirect.
+// the few that do are dropped rather than paying the two motion-following
+// passes for every pixel (1.14-1.44x the stencil's solve time,
+// docs/benchmarks.md): their pixels keep their spatial terms, the rest the
+// stencil. Shares measured on the four animations of docs/benchmarks.md: 4 %
+// on the demo (a box moving under a slow camera), 31 % stiff, 81 % textured,
+// 98 % indirect. Following the demo's 4 % instead read the same within the
+// spread of two runs each (docs/benchmarks.md), so the simpler solve stays.
 constexpr double kMinMovingShare = 0.1;
 
 // The window's map, from each frame's GradientFrame::temporal_target (frames
