@@ -249,34 +249,10 @@ void update_solution(float* x, float* p, const float* r, const float* M, float s
   }
 }
 
-// The weight of temporal term k (0 dt, 1 dxdt, 2 dydt) at column c.
-template <bool kMasked>
-inline float temporal_weight(const TemporalForwardLine& l, int k, int c) {
-  if constexpr (kMasked) return l.term_weight[k] * float((l.bits[c] >> (kBitDt + k)) & 1);
-  return l.weight[k][c];
-}
-
-// One pixel of the forward pass, reading its target wherever it lies. Where
-// a constraint does not exist its weight is 0 (PoissonSystem's contract), so
-// a pixel without a target may read itself (j = n), and the target's right
-// and lower neighbours are clamped into the grid.
-template <bool kMasked>
-inline void forward_pixel(const TemporalForwardLine& l, int c) {
-  const int64_t W = l.width, n = l.begin + c;
-  const int32_t o = l.next_offset[c];
-  const int64_t j = o != kNoTemporalTarget ? n + l.frame_size + o : n;
-  const int64_t jx = j + 1 < l.last ? j + 1 : l.last, jy = j + W < l.last ? j + W : l.last;
-  const float* x = l.x;
-  const float xi = x[n], xj = x[j];
-  l.h[0][c] = temporal_weight<kMasked>(l, 0, c) * (xj - xi);
-  l.h[1][c] = temporal_weight<kMasked>(l, 1, c) * ((x[jx] - xj) - (x[n + 1] - xi));
-  l.h[2][c] = temporal_weight<kMasked>(l, 2, c) * ((x[jy] - xj) - (x[n + W] - xi));
-}
-
 // Columns [c0, c1) whose landing pixels all have offset o (the caller checked
 // that every read is inside the grid; a pixel without a target reads the
-// shared offset's, under weight 0): forward_pixel's arithmetic on contiguous
-// reads, so it vectorises. Everything the loop reads is a local
+// shared offset's, under weight 0): forward_scattered's arithmetic on
+// contiguous reads, so it vectorises. Everything the loop reads is a local
 // (a read through `l` could alias the stores and keep it scalar).
 template <bool kMasked>
 void forward_block(const TemporalForwardLine& l, int c0, int c1, int32_t o) {
@@ -312,8 +288,11 @@ void forward_block(const TemporalForwardLine& l, int c0, int c1, int32_t o) {
   }
 }
 
-// Columns [c0, c1) whose targets are scattered: forward_pixel's arithmetic as
-// one loop, which AVX2 and AVX-512 run with gathers.
+// Columns [c0, c1) whose targets are scattered, each read where it lies, as
+// one loop that AVX2 and AVX-512 run with gathers. Where a constraint does
+// not exist its weight is 0 (PoissonSystem's contract), so a pixel without a
+// target may read itself (j = n), and the target's right and lower
+// neighbours are clamped into the grid.
 template <bool kMasked>
 void forward_scattered(const TemporalForwardLine& l, int c0, int c1) {
   // 32-bit indices (the map's own type): the gathers GCC emits take those.
@@ -351,7 +330,7 @@ void forward_scattered(const TemporalForwardLine& l, int c0, int c1) {
 
 template <bool kMasked>
 void forward_line(const TemporalForwardLine& l) {
-  forward_pixel<kMasked>(l, 0);
+  forward_scattered<kMasked>(l, 0, 1);  // column 0 (no block starts there)
   for (int b = 0, c0 = 1; c0 < l.width;) {
     // A run of blocks with one offset is one loop (a block is short for a
     // vector loop's entry and exit).
