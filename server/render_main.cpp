@@ -31,7 +31,7 @@ int usage(const char* msg) {
       "       [--frames A-B] [--threads N] [--seed N] [--integrator pt|gpt|tgpt] [--width W] [--height H]\n"
       "       [--shift replay|reconnect|hybrid] [--temporal-shift replay|reconnect]\n"
       "       [--recon l1|l2|uniform|weighted|none] [--alpha A] [--window W] [--tile-size N] [--keep-negative]\n"
-      "       [--data-term auto|sampled|denoised]\n"
+      "       [--data-term auto|sampled|denoised] [--exr-compression auto|zip|zips|rle|piz|none]\n"
       "       [--param NAME=VALUE ...] [--memory-limit MIB [--spill-dir DIR]]\n"
       "Flags override the job file; values are checked with the job (errors name the field).\n"
       "--memory-limit: tgpt's buffered frames beyond MIB MiB go to unnamed files in DIR (default: the\n"
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
   long long memory_limit_bytes = -1;
   std::string spill_dir;
   for (int i = 1; i < argc; ++i) {
-    auto taken = tools::take_job_flag(argc, argv, &i, {/* sampling = */ true, /* integrator = */ true}, &flags);
+    auto taken = tools::take_job_flag(argc, argv, &i, {/* sampling = */ true, /* integrator = */ true, /* outputs = */ true}, &flags);
     if (!taken.ok()) return usage(taken.status().message().c_str());
     if (taken.value()) continue;
     const std::string a = argv[i];

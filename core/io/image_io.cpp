@@ -348,7 +348,31 @@ Expected<Image> read_rgb_image(const std::string& path, bool raw) {
   }
 }
 
-Status write_exr(const std::string& path, const LayeredImage& image, bool half_float) {
+Expected<ExrCompression> parse_exr_compression(const std::string& name) {
+  if (name == "zip") return ExrCompression::kZip;
+  if (name == "zips") return ExrCompression::kZips;
+  if (name == "rle") return ExrCompression::kRle;
+  if (name == "piz") return ExrCompression::kPiz;
+  if (name == "none") return ExrCompression::kNone;
+  return invalid_argument("must be zip, zips, rle, piz or none");
+}
+
+namespace {
+
+Imf::Compression openexr_compression(ExrCompression c) {
+  switch (c) {
+    case ExrCompression::kZips: return Imf::ZIPS_COMPRESSION;
+    case ExrCompression::kRle: return Imf::RLE_COMPRESSION;
+    case ExrCompression::kPiz: return Imf::PIZ_COMPRESSION;
+    case ExrCompression::kNone: return Imf::NO_COMPRESSION;
+    case ExrCompression::kZip: break;
+  }
+  return Imf::ZIP_COMPRESSION;
+}
+
+}  // namespace
+
+Status write_exr(const std::string& path, const LayeredImage& image, bool half_float, ExrCompression compression) {
   GDVR_RETURN_IF_ERROR(validate_layers(path, image));
   const int width = image.layers.front().image.width();
   const int height = image.layers.front().image.height();
@@ -356,7 +380,7 @@ Status write_exr(const std::string& path, const LayeredImage& image, bool half_f
   configure_openexr();
   try {
     Imf::Header header(width, height);
-    header.compression() = Imf::ZIP_COMPRESSION;
+    header.compression() = openexr_compression(compression);
     Imf::StringVector order;
     Imf::FrameBuffer fb;
     const Imf::PixelType file_type = half_float ? Imf::HALF : Imf::FLOAT;

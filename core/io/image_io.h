@@ -19,7 +19,14 @@ Expected<Image> read_rgb_image(const std::string& path, bool raw = false);
 // unnamed layer, "<layer>.<channel>" for the others, but a bare "<channel>"
 // where the layer is named as its channel (the depth layer "Z" becomes EXR's
 // standard "Z" channel; read_exr turns it back into that layer).
-Status write_exr(const std::string& path, const LayeredImage& image, bool half_float = false);
+// The codec is lossless either way; `compression` trades file size for write
+// time (docs/renderer.md, "EXR codecs").
+enum class ExrCompression { kZip, kZips, kRle, kPiz, kNone };
+Status write_exr(const std::string& path, const LayeredImage& image, bool half_float = false,
+                 ExrCompression compression = ExrCompression::kZip);
+// The job-file names of the codecs ("zip", "zips", "rle", "piz", "none"),
+// as OpenEXR calls them.
+Expected<ExrCompression> parse_exr_compression(const std::string& name);
 // Reads every channel of an EXR back into layers (the inverse of write_exr).
 Expected<LayeredImage> read_exr(const std::string& path);
 // read_exr cropped to `rect` (in the image's pixels: (0, 0) is the data

@@ -31,13 +31,14 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
   const bool integrator = offered.integrator && (a == "--integrator" || a == "--shift" || a == "--temporal-shift" ||
                                                  a == "--recon" || a == "--alpha" || a == "--window" ||
                                                  a == "--tile-size" || a == "--data-term");
+  const bool outputs = offered.outputs && a == "--exr-compression";
   const bool common = a == "--out" || a == "--threads" || a == "--frames" || a == "--width" || a == "--height" ||
                       a == "--seed" || a == "--param" || a == "-D";
   if (offered.integrator && a == "--keep-negative") {
     flags->keep_negative = true;
     return true;
   }
-  if (!sampling && !integrator && !common) return false;
+  if (!sampling && !integrator && !outputs && !common) return false;
   if (*i + 1 >= argc) return invalid_argument(a + " needs a value");
   const std::string value = argv[++*i];
 
@@ -86,6 +87,7 @@ Expected<bool> take_job_flag(int argc, char** argv, int* i, JobFlagSet offered, 
   else if (a == "--temporal-shift") return set_name(kTemporalShiftNames, &flags->temporal_shift);
   else if (a == "--recon") return set_name(kReconMethodNames, &flags->recon);
   else if (a == "--data-term") return set_name(kDataTermNames, &flags->data_term);
+  else if (a == "--exr-compression") flags->exr_compression = value;
   return true;
 }
 
@@ -128,6 +130,7 @@ Expected<JobSpec> job_from_flags(const JobFlags& flags, std::string* base_dir) {
   if (flags.tile_size) job.reconstruction.tile_size = *flags.tile_size;
   if (flags.keep_negative) job.reconstruction.clamp_negative = false;
   if (flags.data_term) job.reconstruction.data_term = *flags.data_term;
+  if (flags.exr_compression) job.outputs.exr_compression = *flags.exr_compression;
   for (const auto& [name, value] : flags.params) job.params[name] = value;
   GDVR_RETURN_IF_ERROR(validate(job));
   return job;

@@ -20,6 +20,7 @@ namespace gdvr::tools {
 struct JobFlagSet {
   bool sampling = false;    // --spp, --time-budget
   bool integrator = false;  // --integrator, --shift, --temporal-shift, --recon, --alpha, --window, --tile-size, --keep-negative, --data-term
+  bool outputs = false;     // --exr-compression
 };
 
 struct JobFlags {
@@ -47,6 +48,7 @@ struct JobFlags {
   std::optional<int> tile_size;  // --tile-size: reconstruction.tile_size
   bool keep_negative = false;  // reconstruction.clamp_negative = false
   std::optional<DataTerm> data_term;  // --data-term: reconstruction.data_term
+  std::optional<std::string> exr_compression;  // --exr-compression: outputs.exr_compression (checked with the job)
   std::map<std::string, std::string> params;
 };
 

@@ -245,10 +245,18 @@ Status JobOutputs::validate(const JobSpec& job, const Options& options, int firs
   return Status::Ok();
 }
 
+ExrCompression frame_exr_compression(const JobSpec& job) {
+  // Under a time budget the write is paid out of the frame's time:
+  // at 128x128, T-GPT's 56 channels take 0.05 s as ZIP and 0.009 s as RLE.
+  if (job.outputs.exr_compression == "auto") return job.time_budget_s > 0 ? ExrCompression::kRle : ExrCompression::kZip;
+  auto c = parse_exr_compression(job.outputs.exr_compression);  // validated with the job
+  return c.ok() ? *c : ExrCompression::kZip;
+}
+
 double JobOutputs::estimate_write_seconds(const LayeredImage& layers) const {
   const std::string probe = temporary_path_for(dir_ + "/time_budget_probe.exr");
   const auto start = std::chrono::steady_clock::now();
-  const Status written = write_exr(probe, layers);
+  const Status written = write_exr(probe, layers, /* half_float = */ false, frame_exr_compression(job_));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   discard_temporary(probe);
   return written.ok() ? seconds : 0.0;
@@ -299,7 +307,8 @@ Expected<WrittenFrame> JobOutputs::write_frame(const FrameOutput& out) {
   const std::string path = dir_ + "/" + rec.file;
   const bool all_layers = job_.outputs.exr_layers.empty();
   const LayeredImage kept = all_layers ? LayeredImage() : selected_layers(out.image, &rec.stats.left_out);
-  GDVR_RETURN_IF_ERROR(write_exr(path, all_layers ? out.image : kept).with_context("writing " + path + ": "));
+  GDVR_RETURN_IF_ERROR(write_exr(path, all_layers ? out.image : kept, /* half_float = */ false, frame_exr_compression(job_))
+                           .with_context("writing " + path + ": "));
   std::error_code ec;
   rec.bytes = uint64_t(fs::file_size(path, ec));
   const ImageLayer* failures = out.image.find("shift_failure_rate");

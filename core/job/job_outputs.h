@@ -21,6 +21,7 @@
 
 #include "core/image/image.h"
 #include "core/io/color_transform.h"
+#include "core/io/image_io.h"
 #include "core/io/video_encoder.h"
 #include "core/job/job_runner.h"
 #include "core/job/job_spec.h"
@@ -46,6 +47,10 @@ const Image* main_rgb(const LayeredImage& image);
 // unnamed layer, the image itself, is always written): what
 // job.outputs.exr_layers may select from.
 const std::vector<std::string>& known_exr_layers();
+
+// The codec of the job's EXR frames: job.outputs.exr_compression, with
+// "auto" resolved (RLE under a time budget, ZIP otherwise).
+ExrCompression frame_exr_compression(const JobSpec& job);
 
 // A final frame as written: its file and what it cost, with the figures the
 // output stage adds (relMSE against the reference, the shift failure rate).

@@ -399,7 +399,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
   if (j.contains("outputs")) {
     const json& oj = j["outputs"];
     std::string op = p + ".outputs";
-    GDVR_RETURN_IF_ERROR(r.check_object(oj, op, {"exr_layers", "previews", "video_codec", "ocio_display", "ocio_view"}));
+    GDVR_RETURN_IF_ERROR(r.check_object(oj, op, {"exr_layers", "exr_compression", "previews", "video_codec", "ocio_display", "ocio_view"}));
     OutputSpec& o = job.outputs;
     if (oj.contains("exr_layers")) {
       const json& lj = oj["exr_layers"];
@@ -410,6 +410,7 @@ Expected<JobSpec> parse_job_json(const std::string& json_text, const std::string
         o.exr_layers.push_back(layer);
       }
     }
+    GDVR_RETURN_IF_ERROR(r.opt(oj, "exr_compression", op, &o.exr_compression));
     GDVR_RETURN_IF_ERROR(r.opt(oj, "previews", op, &o.previews));
     GDVR_RETURN_IF_ERROR(r.opt(oj, "video_codec", op, &o.video_codec));
     GDVR_RETURN_IF_ERROR(r.opt(oj, "ocio_display", op, &o.ocio_display));
@@ -465,6 +466,7 @@ std::string job_to_json(const JobSpec& job) {
   }
   j["animation"] = {{"tracks", tracks}};
   j["outputs"] = {{"exr_layers", job.outputs.exr_layers},
+                  {"exr_compression", job.outputs.exr_compression},
                   {"previews", job.outputs.previews},
                   {"video_codec", job.outputs.video_codec},
                   {"ocio_display", job.outputs.ocio_display},

@@ -48,6 +48,11 @@ struct OutputSpec {
   std::vector<std::string> exr_layers;  // empty: all the integrator produces
   bool previews = true;                 // 8-bit PNG through OCIO
   std::string video_codec = "h264";     // h264 | prores | ffv1 | none
+  // The EXR frames' codec, all lossless: auto | zip | zips | rle | piz | none.
+  // ZIP gives the smallest files, RLE writes several times faster; auto is RLE
+  // under a time budget (which pays for writing the frame, so the time goes to
+  // sampling), ZIP otherwise (docs/renderer.md, "EXR codecs").
+  std::string exr_compression = "auto";
   std::string ocio_display = "sRGB - Display";
   std::string ocio_view = "ACES 1.0 - SDR Video";
 };

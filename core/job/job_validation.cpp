@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/io/image_io.h"
 #include "core/util/echo_text.h"
 
 namespace gdvr {
@@ -73,6 +74,8 @@ Status validate(const JobSpec& job) {
   const std::string& codec = job.outputs.video_codec;
   if (codec != "h264" && codec != "prores" && codec != "ffv1" && codec != "none")
     return field_error("outputs.video_codec", "must be h264, prores, ffv1 or none, not '" + echo_text(codec) + "'");
+  if (const std::string& c = job.outputs.exr_compression; c != "auto" && !parse_exr_compression(c).ok())
+    return field_error("outputs.exr_compression", "must be auto, zip, zips, rle, piz or none, not '" + echo_text(c) + "'");
   return Status::Ok();
 }
 

@@ -375,6 +375,8 @@ TEST_F(ServiceTest, BadInputsGetTheRightStatus) {
        StatusCode::INVALID_ARGUMENT, "ocio"},
       {"unknown codec", R"({"scene": "cbox/cbox-rgb.xml", "outputs": {"video_codec": "vp9"}})",
        StatusCode::INVALID_ARGUMENT, "video_codec"},
+      {"unknown EXR codec", R"({"scene": "cbox/cbox-rgb.xml", "outputs": {"exr_compression": "lzma"}})",
+       StatusCode::INVALID_ARGUMENT, "exr_compression"},
       {"missing reference", R"({"scene": "cbox/cbox-rgb.xml", "reference": "cbox/nope.exr"})", StatusCode::NOT_FOUND,
        "reference"},
       {"reference outside root", R"({"scene": "cbox/cbox-rgb.xml", "reference": "../x.exr"})",

@@ -38,6 +38,45 @@ bool file_exists(const std::string& path) {
   return f.good();
 }
 
+// Every codec a job may pick is lossless: the same bits come back, and the
+// codec is the one asked for (the files differ in size).
+TEST(ExrRoundTrip, EveryCodecGivesTheSameBitsBack) {
+  LayeredImage img;
+  img.add("", {"R", "G", "B"}, ramp(19, 37, 3, 0.5f));  // > 16 lines: several ZIP blocks
+  Image noisy = ramp(19, 37, 3, -3.0f);
+  uint32_t state = 12345;
+  for (float& v : noisy.data()) {
+    state = state * 1664525u + 1013904223u;
+    v += float(state >> 8) * 0x1p-24f;  // mantissa noise, as sampled gradients have
+  }
+  img.add("dx", {"R", "G", "B"}, noisy);
+  Image flat(19, 37, 1);
+  for (float& v : flat.data()) v = 0.25f;  // runs: every codec shrinks it
+  img.add("flat", {"Y"}, flat);
+  std::vector<uintmax_t> sizes;
+  for (const char* name : {"zip", "zips", "rle", "piz", "none"}) {
+    Expected<ExrCompression> codec = parse_exr_compression(name);
+    ASSERT_TRUE(codec.ok()) << name;
+    const std::string path = scratch(std::string("codec_") + name + ".exr");
+    ASSERT_TRUE(write_exr(path, img, /* half_float = */ false, *codec).ok()) << name;
+    std::ifstream f(path, std::ios::binary | std::ios::ate);
+    sizes.push_back(uintmax_t(f.tellg()));
+    Expected<LayeredImage> back = read_exr(path);
+    ASSERT_TRUE(back.ok()) << name << ": " << back.status().to_string();
+    ASSERT_EQ(back->layers.size(), img.layers.size());
+    for (size_t i = 0; i < img.layers.size(); ++i)
+      EXPECT_EQ(back->layers[i].image.data(), img.layers[i].image.data()) << name << " layer " << i;
+    std::remove(path.c_str());
+  }
+  // Each codec was the one asked for: every one shrinks the file, each to its own size.
+  for (size_t i = 0; i + 1 < sizes.size(); ++i) {
+    EXPECT_LT(sizes[i], sizes.back()) << "codec " << i << " wrote the uncompressed file";
+    for (size_t j = i + 1; j + 1 < sizes.size(); ++j) EXPECT_NE(sizes[i], sizes[j]) << i << " and " << j;
+  }
+  EXPECT_FALSE(parse_exr_compression("dwaa").ok());  // lossy: not offered
+  EXPECT_FALSE(parse_exr_compression("ZIP").ok());
+}
+
 TEST(ExrRoundTrip, MultiLayerOddSizeFloatIsExact) {
   LayeredImage img;
   img.add("", {"R", "G", "B"}, ramp(7, 5, 3, 0.5f));

@@ -43,7 +43,7 @@ Expected<JobSpec> job_from_args(std::vector<std::string> args) {
   for (std::string& a : args) argv.push_back(a.data());
   JobFlags flags;
   for (int i = 1; i < int(argv.size()); ++i) {
-    auto taken = take_job_flag(int(argv.size()), argv.data(), &i, {true, true}, &flags);
+    auto taken = take_job_flag(int(argv.size()), argv.data(), &i, {true, true, true}, &flags);
     if (!taken.ok()) return taken.status();
     if (!taken.value()) return invalid_argument(std::string("not a job flag: ") + argv[size_t(i)]);
   }
@@ -90,6 +90,16 @@ TEST(JobFlagsTest, MalformedBudgetsAreRefusedNamingTheFlag) {
     ASSERT_FALSE(job.ok()) << bad;
     EXPECT_NE(job.status().message().find("--time-budget"), std::string::npos) << job.status().message();
   }
+}
+
+TEST(JobFlagsTest, ExrCompressionOverridesTheFileAndIsCheckedWithTheJob) {
+  auto job = job_from_args({job_file("codec", R"("spp": 1, "outputs": {"exr_compression": "piz"})"),
+                            "--exr-compression", "rle"});
+  ASSERT_TRUE(job.ok()) << job.status().to_string();
+  EXPECT_EQ(job->outputs.exr_compression, "rle");
+  auto bad = job_from_args({job_file("codec_bad", R"("spp": 1)"), "--exr-compression", "lzma"});
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("outputs.exr_compression"), std::string::npos) << bad.status().message();
 }
 
 }  // namespace

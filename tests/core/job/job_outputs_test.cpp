@@ -203,5 +203,18 @@ TEST(JobOutputsTest, FrameEntryRoundTrips) {
   EXPECT_EQ(parse_frame_entry(R"({"frame": "seven"})").status().code(), StatusCode::kInvalidArgument);
 }
 
+// "auto" spends a time budget's seconds on sampling rather than on ZIP.
+TEST(JobOutputsTest, AutoCompressionIsRleUnderATimeBudgetAndZipOtherwise) {
+  JobSpec job;
+  EXPECT_EQ(job.outputs.exr_compression, "auto");
+  EXPECT_EQ(frame_exr_compression(job), ExrCompression::kZip);
+  job.time_budget_s = 0.3;
+  EXPECT_EQ(frame_exr_compression(job), ExrCompression::kRle);
+  job.outputs.exr_compression = "piz";  // named: kept, budget or not
+  EXPECT_EQ(frame_exr_compression(job), ExrCompression::kPiz);
+  job.time_budget_s = 0;
+  EXPECT_EQ(frame_exr_compression(job), ExrCompression::kPiz);
+}
+
 }  // namespace
 }  // namespace gdvr

@@ -84,7 +84,7 @@ TEST(JobSpecTest, ParsesEveryField) {
       {"frame": 0, "lookat": {"origin": [0, 0, -5], "target": [0, 0, 0], "up": [0, 1, 0]}},
       {"time": 1, "translate": [1, 2, 3], "rotate": {"axis": [0, 0, 1], "angle": 90}, "scale": [2, 2, 2]},
       {"frame": 60, "matrix": [1,0,0,5, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]}],
-    "outputs": {"exr_layers": ["primal", "dx"], "previews": false, "video_codec": "ffv1",
+    "outputs": {"exr_layers": ["primal", "dx"], "exr_compression": "rle", "previews": false, "video_codec": "ffv1",
                 "ocio_display": "d", "ocio_view": "v"},
     "priority": 3, "reference": "ref_%04d.exr", "direct_light": {"strata": 2, "edge_strata": 8}})",
                             "job.json");
@@ -112,6 +112,8 @@ TEST(JobSpecTest, ParsesEveryField) {
   EXPECT_NEAR(p.z, 3.0f, 1e-5f);
   EXPECT_FALSE(job->outputs.previews);
   EXPECT_EQ(job->outputs.exr_layers.size(), 2u);
+  EXPECT_EQ(job->outputs.exr_compression, "rle");
+  EXPECT_EQ(parse_job_json(job_to_json(*job), "again")->outputs.exr_compression, "rle");
   EXPECT_EQ(job->priority, 3);
   EXPECT_EQ(job->direct_light.strata, 2);
   EXPECT_EQ(job->direct_light.edge_strata, 8);
@@ -249,6 +251,9 @@ TEST(JobSpecTest, ValidateNamesTheField) {
   bad = job;
   bad.outputs.video_codec = "gif";
   expect_field(bad, "job.outputs.video_codec");
+  bad = job;
+  bad.outputs.exr_compression = "dwaa";  // lossy: not offered
+  expect_field(bad, "job.outputs.exr_compression");
   bad = job;
   bad.frames = "0-99999999";
   EXPECT_EQ(validate(bad).code(), StatusCode::kResourceExhausted);
