@@ -13,6 +13,11 @@
 // operator: x += argmin_y α²‖y − (I_g − x)‖² + Σ‖H y‖² (every gradient
 // target 0, the same masks). It keeps L1's edges and the primal's unbiased
 // local mean; docs/reconstruction.md, "L1 and its energy", has the numbers.
+//
+// A denoised data term (the window carries a trust map) starts the rounds from
+// the denoiser's image, and its own shorter schedule applies
+// (ReconSettings::l1_denoised_*; docs/reconstruction.md, "L1 from a denoised
+// data term").
 #include <algorithm>
 #include <cmath>
 
@@ -55,6 +60,11 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
   // data term's low frequencies at the scale the gradients cannot reach.
   const Field data_weight = gather_data_weight(window, layout);
 
+  const bool from_denoised = !data_weight.empty();
+  const int rounds = from_denoised ? settings.l1_denoised_outer_iterations : settings.l1_outer_iterations;
+  const double epsilon0 = from_denoised ? settings.l1_denoised_epsilon0 : settings.l1_epsilon0;
+  const double decay = from_denoised ? settings.l1_denoised_epsilon_decay : settings.l1_epsilon_decay;
+
   Field b, inv_diag, residual;
   for (int c = 0; c < layout.channels; ++c) {
     std::array<Field, kTermCount> d;
@@ -65,8 +75,8 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
     }
     Field x = d[term_index(Term::kPrimal)];
 
-    for (int k = 1; k <= settings.l1_outer_iterations; ++k) {
-      const float eps = float(settings.l1_epsilon0 * std::pow(settings.l1_epsilon_decay, k - 1));
+    for (int k = 1; k <= rounds; ++k) {
+      const float eps = float(epsilon0 * std::pow(decay, k - 1));
       // ---- Reweight: w = β / (|r| + ε_k) on valid constraints ----
       double sum = 0;
       int64_t count = 0;
@@ -111,7 +121,7 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
       A.rhs(targets, &b);
       const PcgResult r = solve_pcg(A, b, inv_diag, &x, settings.l1_inner_iterations, settings.l1_inner_tolerance);
       result->stats.cg_iterations += r.iterations;
-      if (k == settings.l1_outer_iterations)
+      if (k == rounds)
         result->stats.relative_residual = std::max(result->stats.relative_residual, r.relative_residual);
     }
     if (low_frequencies) {
@@ -128,7 +138,7 @@ Status solve_irls_l1(const GradientWindow& window, const ConstraintLayout& layou
     }
     scatter_channel(g, x, c, result);
   }
-  result->stats.outer_iterations = settings.l1_outer_iterations;
+  result->stats.outer_iterations = rounds;
   return Status::Ok();
 }
 

@@ -38,6 +38,10 @@ Status ReconSettings::validate() const {
   GDVR_RETURN_IF_ERROR(positive_finite(l1_epsilon0, "l1_epsilon0"));
   GDVR_RETURN_IF_ERROR(positive_finite(l1_epsilon_decay, "l1_epsilon_decay"));
   if (l1_epsilon_decay > 1) return invalid_argument("recon settings: l1_epsilon_decay must be <= 1");
+  GDVR_RETURN_IF_ERROR(at_least(l1_denoised_outer_iterations, 1, "l1_denoised_outer_iterations"));
+  GDVR_RETURN_IF_ERROR(positive_finite(l1_denoised_epsilon0, "l1_denoised_epsilon0"));
+  GDVR_RETURN_IF_ERROR(positive_finite(l1_denoised_epsilon_decay, "l1_denoised_epsilon_decay"));
+  if (l1_denoised_epsilon_decay > 1) return invalid_argument("recon settings: l1_denoised_epsilon_decay must be <= 1");
   GDVR_RETURN_IF_ERROR(at_least(cv_iterations, 0, "cv_iterations"));
   GDVR_RETURN_IF_ERROR(positive_finite(variance_floor, "variance_floor"));
   if (tile_size != 0 && tile_size < kMinReconTileSize)
@@ -54,7 +58,8 @@ std::string ReconSettings::to_string() const {
   s << "} l2_max_iterations=" << l2_max_iterations << " l2_tolerance=" << l2_tolerance
     << " l1_outer_iterations=" << l1_outer_iterations << " l1_inner_iterations=" << l1_inner_iterations
     << " l1_inner_tolerance=" << l1_inner_tolerance << " l1_epsilon0=" << l1_epsilon0
-    << " l1_epsilon_decay=" << l1_epsilon_decay
+    << " l1_epsilon_decay=" << l1_epsilon_decay << " l1_denoised_outer_iterations=" << l1_denoised_outer_iterations
+    << " l1_denoised_epsilon0=" << l1_denoised_epsilon0 << " l1_denoised_epsilon_decay=" << l1_denoised_epsilon_decay
     << " l1_low_frequencies_from_primal=" << (l1_low_frequencies_from_primal ? "true" : "false")
     << " cv_iterations=" << cv_iterations
     << " variance_floor=" << variance_floor << " tile_size=" << tile_size << " tile_halo=" << tile_halo;

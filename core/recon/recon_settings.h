@@ -80,6 +80,16 @@ struct ReconSettings {
   double l1_inner_tolerance = 1e-3;
   double l1_epsilon0 = 0.05;
   double l1_epsilon_decay = 0.5;
+  // Where the data term is a denoiser's image (the window carries its trust
+  // map), IRLS starts from that image, already close to the answer: its first
+  // reweighting finds the sampled gradients that disagree with it (the
+  // outliers), and iterating on towards the exact L1 minimiser pulls each
+  // pixel to the median of its constraints, which costs per-pixel error (and
+  // half of stage 2's time). So that case stops after these rounds, at
+  // ε = 0.01 then 0.001 (docs/reconstruction.md, "L1 from a denoised data term").
+  int l1_denoised_outer_iterations = 2;
+  double l1_denoised_epsilon0 = 0.01;
+  double l1_denoised_epsilon_decay = 0.1;
   // Give the L1 result back the low frequencies of what it left of the primal
   // (core/recon/irls_l1.cpp): L1 alone tends to the median and loses the
   // energy of rare bright paths (−50 % on a room lit through a gap at 4 spp).

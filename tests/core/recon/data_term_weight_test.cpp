@@ -114,7 +114,7 @@ TEST(DataTermWeightTest, RefusesMismatchedShapesAndBadSettings) {
 // both solvers (L2 then runs its float-weight operator, L1 scales its
 // primal weights). L1's low-frequency correction keeps the base α (it gives
 // back the data term's low frequencies at the scale the gradients cannot
-// reach), so it is off here.
+// reach), so it is off here, and L1 runs its full schedule on both.
 TEST(DataTermWeightTest, AConstantMultiplierIsAScaledAlpha) {
   for (ReconMethod method : {ReconMethod::kL2, ReconMethod::kL1}) {
     test::SceneOptions o;
@@ -133,6 +133,10 @@ TEST(DataTermWeightTest, AConstantMultiplierIsAScaledAlpha) {
     with_map.l2_tolerance = scaled.l2_tolerance = 1e-6;
     with_map.l1_inner_tolerance = scaled.l1_inner_tolerance = 1e-6;
     with_map.l1_low_frequencies_from_primal = scaled.l1_low_frequencies_from_primal = false;
+    // A map also selects L1's denoised-term schedule (irls_l1.cpp): the same rounds here.
+    with_map.l1_denoised_outer_iterations = with_map.l1_outer_iterations;
+    with_map.l1_denoised_epsilon0 = with_map.l1_epsilon0;
+    with_map.l1_denoised_epsilon_decay = with_map.l1_epsilon_decay;
     scaled.alpha = with_map.alpha * 2.5;
     auto a = reconstruct(weighted, with_map);
     auto b = reconstruct(test::make_window(o), scaled);
