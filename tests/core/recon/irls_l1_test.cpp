@@ -10,8 +10,17 @@
 namespace gdvr {
 namespace {
 
-// A few grossly wrong gradients (a "firefly" in the gradient buffers) smear
-// into a halo under L2 but are voted down under L1 (docs/reconstruction.md).
+// A few grossly wrong gradients (a "firefly" in the gradient buffers) in frame 0.
+void plant_outlier_gradients(GradientWindow& w) {
+  const int spots[][2] = {{5, 5}, {30, 8}, {12, 25}, {25, 20}};
+  for (auto& s : spots)
+    for (int c = 0; c < 3; ++c) {
+      test::mutable_frame(w, 0).buffer(Term::kDx).at(s[0], s[1], c) += 4.0f;
+      test::mutable_frame(w, 0).buffer(Term::kDy).at(s[0] + 1, s[1] + 2, c) -= 3.0f;
+    }
+}
+
+// They smear into a halo under L2 but are voted down under L1 (docs/reconstruction.md).
 TEST(IrlsL1Test, RobustToPlantedOutlierGradientsWhereL2IsNot) {
   for (int frames : {1, 3}) {
     test::SceneOptions o;
@@ -19,12 +28,7 @@ TEST(IrlsL1Test, RobustToPlantedOutlierGradientsWhereL2IsNot) {
     o.temporal = frames > 1;
     o.primal_sigma = 0.01f;
     GradientWindow w = test::make_window(o);
-    const int spots[][2] = {{5, 5}, {30, 8}, {12, 25}, {25, 20}};
-    for (auto& s : spots)
-      for (int c = 0; c < 3; ++c) {
-        test::mutable_frame(w, 0).buffer(Term::kDx).at(s[0], s[1], c) += 4.0f;
-        test::mutable_frame(w, 0).buffer(Term::kDy).at(s[0] + 1, s[1] + 2, c) -= 3.0f;
-      }
+    plant_outlier_gradients(w);
     ReconSettings l2, l1;
     l1.method = ReconMethod::kL1;
     auto r2 = reconstruct(w, l2);
@@ -50,12 +54,7 @@ TEST(IrlsL1Test, FromADenoisedDataTermFewRoundsKeepTheOutliersOut) {
     o.temporal = frames > 1;
     o.primal_sigma = 0.01f;  // the denoiser's image: close to the truth
     GradientWindow w = test::make_window(o);
-    const int spots[][2] = {{5, 5}, {30, 8}, {12, 25}, {25, 20}};
-    for (auto& s : spots)
-      for (int c = 0; c < 3; ++c) {
-        test::mutable_frame(w, 0).buffer(Term::kDx).at(s[0], s[1], c) += 4.0f;
-        test::mutable_frame(w, 0).buffer(Term::kDy).at(s[0] + 1, s[1] + 2, c) -= 3.0f;
-      }
+    plant_outlier_gradients(w);
     GradientWindow plain;  // the same buffers without the map (the frames are shared: copy them)
     for (const auto& f : w.frames) plain.frames.push_back(std::make_shared<GradientFrame>(*f));
     for (int t = 0; t < frames; ++t) {
