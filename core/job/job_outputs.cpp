@@ -247,7 +247,8 @@ Status JobOutputs::validate(const JobSpec& job, const Options& options, int firs
 
 ExrCompression frame_exr_compression(const JobSpec& job) {
   // Under a time budget the write is paid out of the frame's time:
-  // at 128x128, T-GPT's 56 channels take 0.05 s as ZIP and 0.009 s as RLE.
+  // at 128x128, T-GPT's 56 channels cost 0.028 s over none as ZIP, 0.010 s as RLE
+  // (docs/benchmarks.md, "EXR codecs").
   if (job.outputs.exr_compression == "auto") return job.time_budget_s > 0 ? ExrCompression::kRle : ExrCompression::kZip;
   auto c = parse_exr_compression(job.outputs.exr_compression);  // validated with the job
   return c.ok() ? *c : ExrCompression::kZip;
